@@ -1,0 +1,53 @@
+# r1: two commands. `make run` and `make test` install what is missing, build, and run.
+# Build trees: build/ (RelWithDebInfo), build-asan/ (ASan+UBSan, tests), build-fuzz/ (clang-14 libFuzzer).
+JOBS ?= $(shell nproc)
+CMAKE_FLAGS ?=
+R1 := build/cli/r1
+OUT ?= out
+
+.PHONY: all deps build run test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	@cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DR1_WERROR=ON $(CMAKE_FLAGS) >/dev/null
+	@cmake --build build -j $(JOBS)
+
+# The main job on the embedded default graph: generate the crystal graph, then summarise it.
+run: build
+	@mkdir -p $(OUT)
+	@$(R1) gen crystal -o $(OUT)/crystal.graph
+	@$(R1) info $(OUT)/crystal.graph
+
+test: build
+	@ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
+	@$(MAKE) --no-print-directory test-asan
+	@$(MAKE) --no-print-directory fuzz-smoke
+
+test-fast: build
+	@ctest --test-dir build --output-on-failure -j $(JOBS) -LE slow --timeout 900
+
+test-asan: deps
+	@cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DR1_SANITIZE=ON -DR1_BUILD_BENCH=OFF -DR1_WERROR=ON $(CMAKE_FLAGS) >/dev/null
+	@cmake --build build-asan -j $(JOBS)
+	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) -LE "slow|install" --timeout 1800
+
+fuzz-build: deps
+	@cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14 \
+	  -DR1_FUZZ=ON -DR1_BUILD_TESTS=OFF -DR1_BUILD_BENCH=OFF $(CMAKE_FLAGS) >/dev/null
+	@cmake --build build-fuzz -j $(JOBS)
+
+# Every fuzz target runs briefly from its committed corpus (FUZZ_SECONDS each).
+FUZZ_SECONDS ?= 15
+fuzz-smoke: fuzz-build
+	@scripts/fuzz-smoke.sh build-fuzz $(FUZZ_SECONDS)
+
+bench: build
+	@for b in build/bench/r1_bench_*; do $$b; done
+
+clean:
+	rm -rf build build-asan build-fuzz $(OUT)

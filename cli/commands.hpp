@@ -1,0 +1,19 @@
+// The r1 subcommands: each adds itself to the CLI11 app and, when chosen, sets the runner.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+#include "r1/spec/status.hpp"
+
+namespace r1::cli {
+
+using Runner = std::function<Status()>;
+
+void add_hash(CLI::App& app, Runner& selected);
+void add_info(CLI::App& app, Runner& selected);
+void add_convert(CLI::App& app, Runner& selected);
+void add_gen(CLI::App& app, Runner& selected);
+
+}  // namespace r1::cli

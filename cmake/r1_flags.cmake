@@ -1,0 +1,21 @@
+# Compiler flags shared by every target (requirement R1-NUM-001: no fast-math, no FMA contraction).
+add_compile_options(
+  -ffp-contract=off      # no fused multiply-add: a*b+c rounds twice everywhere
+  -fno-fast-math
+  -fno-finite-math-only
+  -Wall -Wextra -Wshadow -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Wunused
+  -Woverloaded-virtual -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
+if(R1_WERROR)
+  add_compile_options(-Werror)
+endif()
+if(R1_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+if(R1_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "R1_FUZZ needs clang (configure with -DCMAKE_CXX_COMPILER=clang++-14)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()

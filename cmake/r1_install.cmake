@@ -1,0 +1,20 @@
+# Installation: headers under include/r1/, the r1 archive, the r1 command and a CMake package
+# so another project can find_package(r1 CONFIG) and link r1::r1.
+include(CMakePackageConfigHelpers)
+
+install(DIRECTORY fixedpoint/include/ spec/include/ reference/include/
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} FILES_MATCHING PATTERN "*.hpp")
+install(TARGETS r1 r1_fixedpoint_headers r1_spec_headers r1_reference_headers
+        EXPORT r1Targets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(TARGETS r1_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(EXPORT r1Targets NAMESPACE r1:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/r1)
+
+configure_package_config_file(cmake/r1Config.cmake.in ${CMAKE_CURRENT_BINARY_DIR}/r1Config.cmake
+                              INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/r1)
+write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/r1ConfigVersion.cmake
+                                 COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/r1Config.cmake ${CMAKE_CURRENT_BINARY_DIR}/r1ConfigVersion.cmake
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/r1)

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs the Debian packages r1 needs, and only those that are missing.
+# Usage: scripts/install-deps.sh [--check]   (--check lists what is missing, installs nothing)
+set -euo pipefail
+
+# Why each package is here:
+#   build: compiler, CMake, Ninja; clang-14 + its runtime for libFuzzer and the sanitizer build
+#   numerics: Boost.Multiprecision (references in property tests), Eigen + Spectra (eigensolvers)
+#   input/CLI: toml++, CLI11, nlohmann-json; TBB for the parallel paths
+#   images: OpenImageIO (+ the tools and OpenCV core its CMake config asks for), OpenColorIO
+#   tests/bench: GoogleTest/GoogleMock, RapidCheck, Google Benchmark, SciPy for peer comparisons
+PACKAGES=(
+  g++ cmake ninja-build make pkg-config
+  clang-14 libclang-rt-14-dev lld
+  libboost-dev libeigen3-dev libspectra-dev
+  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libtbb-dev
+  libopenimageio-dev openimageio-tools libopencv-core-dev libopencolorio-dev
+  libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
+  python3 python3-numpy python3-scipy
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed$'; then
+    missing+=("$p")
+  fi
+done
+
+if [ "${1:-}" = "--check" ]; then
+  if [ ${#missing[@]} -eq 0 ]; then echo "all dependencies present"; else echo "missing: ${missing[*]}"; fi
+  exit 0
+fi
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "r1: installing missing packages: ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,41 @@
+// Shared helpers for r1's test suites: source paths, temporary directories, running the CLI.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace r1::test {
+
+std::filesystem::path source_dir();
+// ../shared/data beside the checkout when present (published constants and vectors), else empty.
+std::filesystem::path shared_data_dir();
+std::string read_file(const std::filesystem::path& p);
+std::vector<std::uint8_t> read_bytes(const std::filesystem::path& p);
+void write_file(const std::filesystem::path& p, const std::string& bytes);
+
+// A fresh directory under the build tree, removed when the object goes out of scope.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+// Runs the built `r1` with the given arguments (no shell), capturing stdout and stderr.
+// `stdin_data`, when given, is fed to standard input.
+CliResult run_cli(const std::vector<std::string>& args, const std::string* stdin_data = nullptr);
+
+}  // namespace r1::test
