@@ -1,114 +1,13 @@
-// Hemera v2: Poseidon2 permutation over Goldilocks and the sponge/tree modes (R1-HASH-001..012).
-#include "r1/fixedpoint/hemera.hpp"
-
-#include <tbb/parallel_for.h>
-
+// Hemera sponge modes one input at a time (R1-HASH-004..012): plain, keyed, derive-key, the tree's
+// leaf and parent nodes and its recursive definition, hex.
+#include <algorithm>
 #include <cstring>
 
-#include "hemera_constants.inc"
+#include "hemera_internal.hpp"
 
 namespace r1::hemera {
 
-namespace {
-
-using gl::Fp;
-
-constexpr std::uint64_t DOMAIN_HASH = 0;
-constexpr std::uint64_t DOMAIN_KEYED = 1;
-constexpr std::uint64_t DOMAIN_DERIVE_CONTEXT = 2;
-constexpr std::uint64_t DOMAIN_DERIVE_MATERIAL = 3;
-
-// Capacity layout (state[8..15]): 8 chunk counter, 9 tree flags, 10 input length, 11 domain tag.
-constexpr std::size_t CAP_COUNTER = 8;
-constexpr std::size_t CAP_FLAGS = 9;
-constexpr std::size_t CAP_LENGTH = 10;
-constexpr std::size_t CAP_DOMAIN = 11;
-
-constexpr std::uint64_t FLAG_ROOT = 1;
-constexpr std::uint64_t FLAG_PARENT = 2;
-constexpr std::uint64_t FLAG_CHUNK = 4;
-
-inline Fp F(std::uint64_t x) { return Fp::from_u64(x); }
-
-// x -> x^7 (full-round S-box).
-inline Fp sbox7(Fp x) {
-  const Fp x2 = gl::square(x);
-  const Fp x3 = gl::mul(x2, x);
-  const Fp x4 = gl::square(x2);
-  return gl::mul(x3, x4);
-}
-
-// External matrix circ(2 M4, M4, M4, M4): M4 on each group of four, then each element gains the
-// sum of the elements in its lane (i mod 4) over the four groups.
-void external(State& s) {
-  Fp t[WIDTH];
-  for (std::size_t g = 0; g < 4; ++g) {
-    const Fp a = F(s[4 * g]), b = F(s[4 * g + 1]), c = F(s[4 * g + 2]), d = F(s[4 * g + 3]);
-    // M4 rows: [2 3 1 1], [1 2 3 1], [1 1 2 3], [3 1 1 2]
-    const Fp ab = gl::add(a, b), cd = gl::add(c, d);
-    const Fp sum = gl::add(ab, cd);
-    t[4 * g + 0] = gl::add(gl::add(sum, a), gl::add(b, b));  // 2a + 3b + c + d
-    t[4 * g + 1] = gl::add(gl::add(sum, b), gl::add(c, c));  // a + 2b + 3c + d
-    t[4 * g + 2] = gl::add(gl::add(sum, c), gl::add(d, d));  // a + b + 2c + 3d
-    t[4 * g + 3] = gl::add(gl::add(sum, d), gl::add(a, a));  // 3a + b + c + 2d
-  }
-  for (std::size_t lane = 0; lane < 4; ++lane) {
-    const Fp lane_sum = gl::add(gl::add(t[lane], t[4 + lane]), gl::add(t[8 + lane], t[12 + lane]));
-    for (std::size_t g = 0; g < 4; ++g) s[4 * g + lane] = gl::add(t[4 * g + lane], lane_sum).v;
-  }
-}
-
-// Internal matrix: x'_i = d_i x_i + sum_j x_j.
-void internal(State& s) {
-  Fp sum{};
-  for (std::size_t i = 0; i < WIDTH; ++i) sum = gl::add(sum, F(s[i]));
-  for (std::size_t i = 0; i < WIDTH; ++i)
-    s[i] = gl::add(gl::mul(F(detail::kInternalDiag[i]), F(s[i])), sum).v;
-}
-
-void full_round(State& s, std::size_t r) {
-  for (std::size_t i = 0; i < WIDTH; ++i)
-    s[i] = sbox7(gl::add(F(s[i]), F(detail::kRoundFull[WIDTH * r + i]))).v;
-  external(s);
-}
-
-// Seven little-endian bytes per element: always below p, so no reduction is needed.
-void bytes_to_rate(const std::uint8_t* block, std::uint64_t out[RATE]) {
-  for (std::size_t i = 0; i < RATE; ++i) {
-    std::uint64_t v = 0;
-    for (std::size_t b = 0; b < 7; ++b) v |= static_cast<std::uint64_t>(block[7 * i + b]) << (8 * b);
-    out[i] = v;
-  }
-}
-
-Digest digest_of(const State& s) {
-  Digest d{};
-  for (std::size_t i = 0; i < 4; ++i)
-    for (std::size_t b = 0; b < 8; ++b) d[8 * i + b] = static_cast<std::uint8_t>(s[i] >> (8 * b));
-  return d;
-}
-
-// A digest back to four elements; digests are canonical, and any 64-bit word is reduced so
-// that keys of arbitrary bytes stay well defined.
-void digest_words(const Digest& d, std::uint64_t out[4]) {
-  for (std::size_t i = 0; i < 4; ++i) {
-    std::uint64_t v = 0;
-    for (std::size_t b = 0; b < 8; ++b) v |= static_cast<std::uint64_t>(d[8 * i + b]) << (8 * b);
-    out[i] = F(v).v;
-  }
-}
-
-}  // namespace
-
-void permute(State& s) {
-  external(s);
-  for (std::size_t r = 0; r < 4; ++r) full_round(s, r);
-  for (std::size_t r = 0; r < 16; ++r) {
-    s[0] = gl::pow_p_minus_2(gl::add(F(s[0]), F(detail::kRoundPartial[r]))).v;
-    internal(s);
-  }
-  for (std::size_t r = 4; r < 8; ++r) full_round(s, r);
-}
+using namespace detail;
 
 Hasher::Hasher() : Hasher(DOMAIN_HASH) {}
 
@@ -132,9 +31,7 @@ Hasher Hasher::derive_key_material(const Digest& context_hash) {
 }
 
 void Hasher::absorb_block(const std::uint8_t* block) {
-  std::uint64_t e[RATE];
-  bytes_to_rate(block, e);
-  for (std::size_t i = 0; i < RATE; ++i) state_[i] = gl::add(F(state_[i]), F(e[i])).v;
+  absorb_rate(state_, block);
   permute(state_);
 }
 
@@ -160,16 +57,9 @@ Hasher& Hasher::update(std::span<const std::uint8_t> data) {
 }
 
 Digest Hasher::finalize() const {
-  // Always one padded block: the rest of the input, 0x01, zeros; the byte length goes to the
-  // capacity so that inputs differing only in trailing zeros cannot collide.
+  // Always one padded block, even after a whole number of blocks.
   State s = state_;
-  std::array<std::uint8_t, RATE_BYTES> pad{};
-  std::memcpy(pad.data(), buf_.data(), buf_len_);
-  pad[buf_len_] = 0x01;
-  std::uint64_t e[RATE];
-  bytes_to_rate(pad.data(), e);
-  for (std::size_t i = 0; i < RATE; ++i) s[i] = gl::add(F(s[i]), F(e[i])).v;
-  s[CAP_LENGTH] = F(absorbed_).v;
+  absorb_final(s, buf_.data(), buf_len_, absorbed_);
   permute(s);
   return digest_of(s);
 }
@@ -187,21 +77,13 @@ Digest derive_key(std::string_view context, std::span<const std::uint8_t> materi
 
 Digest hash_leaf(std::span<const std::uint8_t> chunk, std::uint64_t counter, bool is_root) {
   // Content first through the plain sponge, then one permutation binds position and flags.
-  const Digest base = hash(chunk);
-  State s{};
-  digest_words(base, s.data());
-  s[CAP_COUNTER] = F(counter).v;
-  s[CAP_FLAGS] = FLAG_CHUNK | (is_root ? FLAG_ROOT : 0);
+  State s = leaf_state(hash(chunk), counter, is_root);
   permute(s);
   return digest_of(s);
 }
 
 Digest hash_node(const Digest& left, const Digest& right, bool is_root) {
-  // Two 4-element children fill the 8-element rate exactly: one permutation.
-  State s{};
-  digest_words(left, s.data());
-  digest_words(right, s.data() + 4);
-  s[CAP_FLAGS] = FLAG_PARENT | (is_root ? FLAG_ROOT : 0);
+  State s = node_state(left, right, is_root);
   permute(s);
   return digest_of(s);
 }
@@ -218,25 +100,7 @@ Digest merge_leaves(std::span<const Digest> leaves, bool is_root) {
   return hash_node(l, r, is_root);
 }
 
-void parallel_for(std::size_t n, const void* ctx, void (*body)(const void*, std::size_t)) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) body(ctx, i);
-  });
-}
-
 }  // namespace detail
-
-Digest root_hash(std::span<const std::uint8_t> data, bool parallel) {
-  return root_hash_chunks(
-      data.size(),
-      [&](std::uint64_t i, std::span<std::uint8_t> out) {
-        const std::size_t off = static_cast<std::size_t>(i) * CHUNK_BYTES;
-        const std::size_t len = std::min(CHUNK_BYTES, data.size() - off);
-        std::memcpy(out.data(), data.data() + off, len);
-        return len;
-      },
-      parallel);
-}
 
 std::string to_hex(std::span<const std::uint8_t> bytes) {
   static constexpr char digits[] = "0123456789abcdef";
