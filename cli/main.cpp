@@ -12,6 +12,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "r1 0.1.0");
   r1::cli::Runner selected;
   r1::cli::add_hash(app, selected);
+  r1::cli::add_gen(app, selected);
+  r1::cli::add_info(app, selected);
+  r1::cli::add_convert(app, selected);
 
   try {
     app.parse(argc, argv);

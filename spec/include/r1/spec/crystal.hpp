@@ -26,9 +26,12 @@ inline constexpr std::array<std::string_view, 5> kCrystalSizes = {"atom", "enzym
 inline constexpr std::array<int, 5> kCrystalSizeBytes = {256, 512, 1024, 4096, 16384};
 
 struct CrystalTag {
-  std::uint8_t type = 0;    // index into kCrystalTypes
-  std::uint8_t domain = 0;  // index into kCrystalDomains; triad = domain / 3
-  std::uint8_t size = 0;    // index into kCrystalSizes
+  // A particle without metadata keeps kUnknown in every field.
+  static constexpr std::uint8_t kUnknown = 0xFF;
+  std::uint8_t type = kUnknown;    // index into kCrystalTypes
+  std::uint8_t domain = kUnknown;  // index into kCrystalDomains; triad = domain / 3
+  std::uint8_t size = kUnknown;    // index into kCrystalSizes
+  bool known() const { return type != kUnknown; }
   friend bool operator==(const CrystalTag&, const CrystalTag&) = default;
 };
 

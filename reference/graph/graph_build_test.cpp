@@ -1,0 +1,160 @@
+// The layout graph: exact normalisation, symmetry, antisymmetric A2, degrees, components
+// (decision 3, R1-IN-050..058).
+#include "r1/reference/graph_build.hpp"
+
+#include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
+
+#include <boost/multiprecision/cpp_int.hpp>
+
+#include "r1/reference/snapshot_builder.hpp"
+
+namespace {
+
+using r1::u128;
+
+struct L {
+  const char* from;
+  const char* to;
+  std::uint64_t weight;  // whole units
+  int valence;
+};
+
+r1::Snapshot make(const std::vector<L>& links) {
+  r1::SnapshotBuilder b("test");
+  b.snapshot().config = r1::text_input_config();
+  for (const auto& l : links) {
+    r1::Link k;
+    k.height = 1;
+    k.amount = static_cast<u128>(l.weight) << 32;
+    k.valence = static_cast<std::int8_t>(l.valence);
+    k.from = b.particle_by_name(l.from);
+    k.to = b.particle_by_name(l.to);
+    b.add_link(k);
+  }
+  return std::move(b.finish()).value();
+}
+
+std::int64_t entry(const r1::Graph& g, const std::vector<std::int64_t>& v, std::uint32_t i, std::uint32_t j) {
+  for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+    if (g.col[k] == j) return v[k];
+  return 0;
+}
+
+constexpr std::int64_t ONE = std::int64_t{1} << 32;
+
+TEST(GraphBuild, SmallGraphExactValues) {
+  // a->b 2 (+), b->a 1 (+), b->c 3 (-), c->c 5 (self-loop), c->a 1 (0)
+  const auto s = make({{"a", "b", 2, 1}, {"b", "a", 1, 1}, {"b", "c", 3, -1}, {"c", "c", 5, 1}, {"c", "a", 1, 0}});
+  auto r = r1::build_graph(s);
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  const r1::Graph& g = *r;
+  EXPECT_EQ(g.n, 3u);
+  EXPECT_EQ(g.self_loops_dropped, 1u);
+  EXPECT_EQ(g.nnz(), 6u);
+  // A_sym: ab = 3, bc = 3, ca = 1; max 3 * 1000 (token per-mille) -> ab, bc = 1.0, ca = 1/3.
+  EXPECT_EQ(entry(g, g.w, 0, 1), ONE);
+  EXPECT_EQ(entry(g, g.w, 1, 2), ONE);
+  EXPECT_EQ(entry(g, g.w, 2, 0), 1431655765);  // 2^32 / 3 = 1431655765.33 -> 1431655765
+  EXPECT_EQ(g.weight_scale, (u128{3} << 32) * 1000);
+  // A2(a, b) = +2 - (+1) = 1 -> 1/3; A2(b, c) = -3 -> -1; A2(c, a) = 0 (valence 0).
+  EXPECT_EQ(entry(g, g.a2, 0, 1), 1431655765);
+  EXPECT_EQ(entry(g, g.a2, 1, 0), -1431655765);
+  EXPECT_EQ(entry(g, g.a2, 1, 2), -ONE);
+  EXPECT_EQ(entry(g, g.a2, 2, 1), ONE);
+  EXPECT_EQ(entry(g, g.a2, 2, 0), 0);
+  // Directed A0: a->b = 2/3, b->a = 1/3, b->c = 1, c->a = 1/3.
+  EXPECT_EQ(g.out_ptr, (std::vector<std::uint64_t>{0, 1, 3, 4}));
+  EXPECT_EQ(g.out_w[0], 2863311531);  // 2^33 / 3 = 2863311530.67
+  EXPECT_EQ(g.degree[0], static_cast<std::uint64_t>(ONE + 1431655765));
+  EXPECT_EQ(g.component_size, (std::vector<std::uint32_t>{3}));
+}
+
+TEST(GraphBuild, ComponentsNumberedByLowestParticle) {
+  const auto s = make({{"x", "y", 1, 0}, {"p", "q", 1, 0}, {"z", "z", 1, 0}, {"q", "r", 1, 0}, {"y", "w", 1, 0}});
+  auto r = r1::build_graph(s);
+  ASSERT_TRUE(r.is_ok());
+  // Order: x y p q z r w.
+  EXPECT_EQ(r->component, (std::vector<std::uint32_t>{0, 0, 1, 1, 2, 1, 0}));
+  EXPECT_EQ(r->component_size, (std::vector<std::uint32_t>{3, 3, 1}));
+}
+
+TEST(GraphBuild, NoLinksAndOnlySelfLoopsAreErrors) {
+  auto r = r1::build_graph(make({{"a", "a", 1, 0}}));
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("no links besides 1 self-loops"), std::string::npos);
+}
+
+TEST(GraphBuild, ScaleToQ32MatchesCppIntForHugeValues) {
+  using boost::multiprecision::cpp_int;
+  const u128 scale = (u128{1} << 126) + 12345;
+  const u128 v = (u128{1} << 125) + 777;
+  const std::int64_t q = r1::scale_to_q32(v, scale);
+  const cpp_int num = ((cpp_int(1) << 125) + 777) << 32, den = (cpp_int(1) << 126) + 12345;
+  cpp_int e = num / den;
+  const cpp_int rem = num - e * den;
+  if (rem * 2 > den || (rem * 2 == den && (e & 1) != 0)) ++e;
+  EXPECT_EQ(cpp_int(q), e);
+  EXPECT_EQ(r1::scale_to_q32(scale, scale), ONE);
+  EXPECT_EQ(r1::scale_to_q32(1, 2), ONE / 2);
+  EXPECT_EQ(r1::scale_to_q32(1, u128{1} << 33), 0);  // exactly half a unit: ties to even (0)
+  EXPECT_EQ(r1::scale_to_q32(3, u128{1} << 33), 2);  // 1.5 units: ties to even (2)
+}
+
+// Random snapshots: the invariants every later stage relies on.
+RC_GTEST_PROP(GraphBuild, InvariantsOnRandomSnapshots, ()) {
+  const int n = *rc::gen::inRange(2, 12);
+  const int m = *rc::gen::inRange(1, 40);
+  r1::SnapshotBuilder b("rc");
+  b.snapshot().config = r1::text_input_config();
+  b.snapshot().config.tokens[1] = {"t1", 250};
+  for (int i = 0; i < m; ++i) {
+    r1::Link k;
+    k.height = 1;
+    k.amount = *rc::gen::inRange<std::uint64_t>(1, std::uint64_t{1} << 50);
+    k.token = *rc::gen::inRange(0, 2);
+    k.valence = static_cast<std::int8_t>(*rc::gen::inRange(-1, 2));
+    k.from = b.particle_by_name("v" + std::to_string(*rc::gen::inRange(0, n)));
+    k.to = b.particle_by_name("v" + std::to_string(*rc::gen::inRange(0, n)));
+    b.add_link(k);
+  }
+  auto snap = b.finish();
+  RC_ASSERT(snap.is_ok());
+  auto r = r1::build_graph(*snap);
+  if (!r.is_ok()) {
+    RC_ASSERT(r.status().message().find("self-loops") != std::string::npos);
+    return;
+  }
+  const r1::Graph& g = *r;
+  std::int64_t wmax = 0;
+  for (std::uint32_t i = 0; i < g.n; ++i) {
+    std::uint64_t deg = 0;
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
+      const std::uint32_t j = g.col[k];
+      RC_ASSERT(j != i);
+      if (k > g.row_ptr[i]) RC_ASSERT(g.col[k - 1] < j);  // sorted, merged
+      RC_ASSERT(g.w[k] >= 1);
+      RC_ASSERT(g.w[k] <= ONE);
+      RC_ASSERT(entry(g, g.w, j, i) == g.w[k]);     // symmetric
+      RC_ASSERT(entry(g, g.a2, j, i) == -g.a2[k]);  // antisymmetric
+      RC_ASSERT(std::abs(g.a2[k]) <= g.w[k]);
+      RC_ASSERT(g.component[j] == g.component[i]);
+      deg += static_cast<std::uint64_t>(g.w[k]);
+      wmax = std::max(wmax, g.w[k]);
+    }
+    RC_ASSERT(g.degree[i] == deg);
+    if (i > 0) RC_ASSERT(g.component[i] <= *std::max_element(g.component.begin(), g.component.begin() + i) + 1);
+  }
+  RC_ASSERT(wmax == ONE);  // the largest A_sym entry normalises to exactly 1.0
+  // The same links in another order (particle table fixed) give the same graph.
+  r1::Snapshot shuffled = *snap;
+  std::reverse(shuffled.links.begin(), shuffled.links.end());
+  auto r2 = r1::build_graph(shuffled);
+  RC_ASSERT(r2.is_ok());
+  RC_ASSERT(r2->col == g.col);
+  RC_ASSERT(r2->w == g.w);
+  RC_ASSERT(r2->a2 == g.a2);
+  RC_ASSERT(r2->out_w == g.out_w);
+}
+
+}  // namespace

@@ -1,0 +1,129 @@
+// .graph v1 reader: container, config, records, extension sections (R1-IN-002..007, R1-IN-020..023).
+#include <algorithm>
+#include <unordered_map>
+
+#include "readers.hpp"
+#include "r1/reference/snapshot_builder.hpp"
+#include "toml_subset.hpp"
+
+namespace r1::detail {
+
+namespace {
+
+std::size_t line_at(std::string_view b, std::size_t offset) {
+  return 1 + static_cast<std::size_t>(std::count(b.begin(), b.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
+}
+
+Status read_config(std::string_view text, const std::string& file, std::size_t first_line, SnapshotConfig& c) {
+  R1_ASSIGN(toml::table t, toml_subset::parse(text, file, first_line));
+  const std::string where = file + ": config: ";
+  const auto chain = t["chain_id"].value<std::string>();
+  if (!chain) return Status::input(where + "needs a string chain_id");
+  c.chain_id = *chain;
+  const auto block = t["block"].value<std::int64_t>();
+  if (!block || *block < 1) return Status::input(where + "needs an integer block >= 1");
+  c.block = static_cast<std::uint64_t>(*block);
+  const auto captured = t["captured_at"].value<std::int64_t>();
+  if (!captured) return Status::input(where + "needs an integer captured_at");
+  c.captured_at = *captured;
+  const auto version = t["format_version"].value<std::int64_t>();
+  if (!version) return Status::input(where + "needs format_version = 1");
+  if (*version != 1)
+    return Status::input(where + "format_version " + std::to_string(*version) + " is not supported (r1 reads version 1)");
+  c.format_version = *version;
+  const toml::table* tokens = t["tokens"].as_table();
+  if (tokens == nullptr || tokens->empty()) return Status::input(where + "needs a [tokens] table with at least one token");
+  for (const auto& [key, node] : *tokens) {
+    const std::string k(key.str());
+    std::uint64_t index = 0;
+    if (k.empty() || k.size() > 10 || !std::all_of(k.begin(), k.end(), [](char ch) { return ch >= '0' && ch <= '9'; }) ||
+        (index = std::stoull(k)) > 0xFFFFFFFFull)
+      return Status::input(where + "token key '" + k + "' is not an index 0..4294967295");
+    const toml::table* tok = node.as_table();
+    if (tok == nullptr) return Status::input(where + "token " + k + " must be { symbol = \"...\", weight = N }");
+    const auto symbol = (*tok)["symbol"].value<std::string>();
+    const auto weight = (*tok)["weight"].value<std::int64_t>();
+    if (!symbol || !weight) return Status::input(where + "token " + k + " needs a string symbol and an integer weight");
+    if (*weight < 0) return Status::input(where + "token " + k + " has a negative weight");
+    c.tokens[static_cast<std::uint32_t>(index)] = Token{*symbol, static_cast<std::uint64_t>(*weight)};
+  }
+  return Status::ok();
+}
+
+template <class T>
+T get_le(const std::uint8_t* p, std::size_t n) {
+  T v = 0;
+  for (std::size_t i = 0; i < n; ++i) v |= static_cast<T>(p[i]) << (8 * i);
+  return v;
+}
+
+}  // namespace
+
+Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file, const ProgressFn& progress) {
+  R1_ASSIGN(Container c, parse_container(bytes, file));
+  for (const char* required : {"card", "config", "cyberlinks"})
+    if (c.find(required) == nullptr) return Status::input(file + ": required section '" + required + "' is missing");
+
+  SnapshotBuilder b(file);
+  Snapshot& s = b.snapshot();
+  const ContainerSection* card = c.find("card");
+  if (card->binary) return Status::input(file + ": section 'card' must be text");
+  s.card = std::string(card->body);
+  const ContainerSection* config = c.find("config");
+  if (config->binary) return Status::input(file + ": section 'config' must be text");
+  R1_TRY(read_config(config->body, file, line_at(bytes, config->offset), s.config));
+
+  const ContainerSection* links = c.find("cyberlinks");
+  if (!links->binary) return Status::input(file + ": section 'cyberlinks' must be binary (give its size in [[files]])");
+  for (const auto& f : c.files)
+    if (f.name == "cyberlinks" && f.format != "records")
+      return Status::input(file + ": section 'cyberlinks' has format '" + f.format + "', expected 'records'");
+  if (links->body.size() % kRecordBytes != 0)
+    return Status::input(file + ": byte " + std::to_string(links->offset) + ": cyberlinks size " +
+                         std::to_string(links->body.size()) + " is not a multiple of 128");
+  const std::size_t n = links->body.size() / kRecordBytes;
+  s.links.reserve(n);
+  const auto* base = reinterpret_cast<const std::uint8_t*>(links->body.data());
+  std::uint64_t last_height = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* r = base + i * kRecordBytes;
+    const std::uint64_t off = links->offset + i * kRecordBytes;
+    auto fail = [&](std::size_t field, const std::string& what) {
+      return Status::input(file + ": byte " + std::to_string(off + field) + ": record " + std::to_string(i) + ": " + what);
+    };
+    Link l;
+    l.token = get_le<std::uint32_t>(r + 96, 4);
+    l.amount = get_le<u128>(r + 100, 16);
+    l.valence = static_cast<std::int8_t>(r[116]);
+    l.height = get_le<std::uint64_t>(r + 117, 8);
+    if (l.valence < -1 || l.valence > 1) return fail(116, "valence " + std::to_string(l.valence) + " is not -1, 0 or +1");
+    if (r[125] != 0 || r[126] != 0 || r[127] != 0) return fail(125, "padding bytes are not zero");
+    if (s.config.tokens.find(l.token) == s.config.tokens.end())
+      return fail(96, "token " + std::to_string(l.token) + " is not in the config's [tokens] table");
+    if (l.height < 1 || l.height > s.config.block)
+      return fail(117, "block height " + std::to_string(l.height) + " is outside [1, " + std::to_string(s.config.block) + "]");
+    if (l.height < last_height)
+      return fail(117, "block height " + std::to_string(l.height) + " after " + std::to_string(last_height) +
+                           ": records must be in chain order");
+    last_height = l.height;
+    NeuronId nu;
+    ParticleId from, to;
+    std::copy(r, r + 32, nu.begin());
+    std::copy(r + 32, r + 64, from.begin());
+    std::copy(r + 64, r + 96, to.begin());
+    l.neuron = b.neuron_by_id(nu);
+    l.from = b.particle_by_id(from);  // source before target: decision 2
+    l.to = b.particle_by_id(to);
+    b.add_link(l);
+    if ((i & 0xFFFF) == 0) report(progress, "reading records", i, n);
+  }
+  for (const auto& sec : c.sections) {
+    if (sec.name != "titles" && sec.name != "crystal") continue;
+    if (sec.binary) return Status::input(file + ": section '" + sec.name + "' must be text");
+    R1_TRY(apply_side_text(s, sec.body, file, sec.name == "titles" ? SideKind::kTitles : SideKind::kCrystal, true,
+                           line_at(bytes, sec.offset), nullptr));
+  }
+  return b.finish(progress);
+}
+
+}  // namespace r1::detail

@@ -1,0 +1,117 @@
+// Titles and crystal metadata: side files and .graph extension sections (R1-IN-007, R1-IN-015..016).
+#include <cstring>
+#include <unordered_map>
+
+#include "readers.hpp"
+#include "text_util.hpp"
+
+namespace r1::detail {
+
+namespace {
+
+struct DigestHash {
+  std::size_t operator()(const ParticleId& id) const noexcept {
+    std::size_t h;
+    std::memcpy(&h, id.data(), sizeof h);
+    return h;
+  }
+};
+
+}  // namespace
+
+Status apply_side_text(Snapshot& s, std::string_view text, const std::string& where, SideKind kind, bool strict,
+                       std::size_t first_line, std::size_t* unmatched) {
+  const char* what = kind == SideKind::kTitles ? "titles" : "crystal metadata";
+  if (auto bad = text::find_invalid_utf8(text))
+    return Status::input(where + ": byte " + std::to_string(*bad) + ": " + what + " are not valid UTF-8");
+  std::unordered_map<ParticleId, std::uint32_t, DigestHash> by_id;
+  by_id.reserve(s.particles.size());
+  for (std::size_t i = 0; i < s.particles.size(); ++i) by_id.emplace(s.particles[i], static_cast<std::uint32_t>(i));
+  std::unordered_map<std::string_view, std::uint32_t> by_name;
+  if (!strict) {
+    by_name.reserve(s.names.size());
+    for (std::size_t i = 0; i < s.names.size(); ++i) by_name.emplace(s.names[i], static_cast<std::uint32_t>(i));
+  }
+  std::vector<bool> seen(s.particles.size(), false);
+  if (kind == SideKind::kTitles && s.titles.size() != s.particles.size()) s.titles.assign(s.particles.size(), {});
+  if (kind == SideKind::kCrystal && s.crystal.size() != s.particles.size()) s.crystal.assign(s.particles.size(), {});
+
+  text::LineReader lines(text::strip_bom(text));
+  std::string_view line;
+  while (lines.next(line)) {
+    const std::string at = where + ":" + std::to_string(first_line + lines.line_number() - 1) + ": ";
+    if (text::is_blank(line) || line.front() == '#') continue;
+    std::vector<std::string_view> f;
+    std::size_t p = 0;
+    for (;;) {
+      const std::size_t t = line.find('\t', p);
+      f.push_back(line.substr(p, t == std::string_view::npos ? std::string_view::npos : t - p));
+      if (t == std::string_view::npos) break;
+      p = t + 1;
+    }
+    const std::size_t want = kind == SideKind::kTitles ? 2 : 4;
+    if (f.size() != want)
+      return Status::input(at + "expected " + std::to_string(want) + " tab-separated fields, found " + std::to_string(f.size()));
+    std::optional<std::uint32_t> index;
+    ParticleId id;
+    if (auto it = by_name.find(f[0]); it != by_name.end()) {
+      index = it->second;
+    } else if (hemera::from_hex(f[0], id)) {
+      if (auto jt = by_id.find(id); jt != by_id.end()) index = jt->second;
+    } else if (strict) {
+      return Status::input(at + "'" + std::string(f[0].substr(0, 80)) + "' is not a 64-hex-digit particle id");
+    }
+    if (!index) {
+      if (strict) return Status::input(at + "particle " + std::string(f[0]) + " is not in the snapshot");
+      if (unmatched) ++*unmatched;
+      continue;
+    }
+    if (seen[*index]) return Status::input(at + "second entry for particle '" + std::string(f[0].substr(0, 80)) + "'");
+    seen[*index] = true;
+    if (kind == SideKind::kTitles) {
+      auto title = text::unescape_cell(f[1]);
+      if (!title) return Status::input(at + "bad backslash escape in the title (use \\\\, \\t, \\n, \\r)");
+      s.titles[*index] = std::move(*title);
+    } else {
+      const auto type = crystal_type_index(f[1]);
+      const auto domain = crystal_domain_index(f[2]);
+      const auto size = crystal_size_index(f[3]);
+      if (!type) return Status::input(at + "unknown crystal type '" + std::string(f[1].substr(0, 40)) + "'");
+      if (!domain) return Status::input(at + "unknown crystal domain '" + std::string(f[2].substr(0, 40)) + "'");
+      if (!size) return Status::input(at + "unknown crystal size '" + std::string(f[3].substr(0, 40)) + "'");
+      s.crystal[*index] = CrystalTag{*type, *domain, *size};
+    }
+  }
+  return Status::ok();
+}
+
+std::string format_titles_section(const Snapshot& s) {
+  std::string o;
+  for (std::size_t i = 0; i < s.titles.size(); ++i) {
+    if (s.titles[i].empty()) continue;
+    o += hemera::to_hex(s.particles[i]);
+    o += '\t';
+    o += text::escape_cell(s.titles[i]);
+    o += '\n';
+  }
+  return o;
+}
+
+std::string format_crystal_section(const Snapshot& s) {
+  std::string o;
+  for (std::size_t i = 0; i < s.crystal.size(); ++i) {
+    const CrystalTag& t = s.crystal[i];
+    if (!t.known()) continue;
+    o += hemera::to_hex(s.particles[i]);
+    o += '\t';
+    o += kCrystalTypes[t.type];
+    o += '\t';
+    o += kCrystalDomains[t.domain];
+    o += '\t';
+    o += kCrystalSizes[t.size];
+    o += '\n';
+  }
+  return o;
+}
+
+}  // namespace r1::detail
