@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ struct Target {
   const char* name;
   TargetFn fn;
 };
+
+// Test output names the target rather than dumping its bytes.
+inline void PrintTo(const Target& t, std::ostream* os) { *os << t.name; }
 
 std::vector<Target>& registry();
 bool register_target(const char* name, TargetFn fn);

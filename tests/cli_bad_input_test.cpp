@@ -16,6 +16,9 @@ struct Case {
   std::string file, command, expect;
 };
 
+// ctest shows the parameter; print the case, not its bytes.
+void PrintTo(const Case& c, std::ostream* os) { *os << c.command << " " << c.file; }
+
 std::vector<Case> load_cases() {
   std::vector<Case> cases;
   std::istringstream in(r1::test::read_file(r1::test::source_dir() / "tests/bad_input/cases.tsv"));

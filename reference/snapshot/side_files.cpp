@@ -1,37 +1,18 @@
 // Titles and crystal metadata: side files and .graph extension sections (R1-IN-007, R1-IN-015..016).
-#include <cstring>
-#include <unordered_map>
 
+#include "r1/reference/intern_index.hpp"
 #include "readers.hpp"
 #include "text_util.hpp"
 
 namespace r1::detail {
-
-namespace {
-
-struct DigestHash {
-  std::size_t operator()(const ParticleId& id) const noexcept {
-    std::size_t h;
-    std::memcpy(&h, id.data(), sizeof h);
-    return h;
-  }
-};
-
-}  // namespace
 
 Status apply_side_text(Snapshot& s, std::string_view text, const std::string& where, SideKind kind, bool strict,
                        std::size_t first_line, std::size_t* unmatched) {
   const char* what = kind == SideKind::kTitles ? "titles" : "crystal metadata";
   if (auto bad = text::find_invalid_utf8(text))
     return Status::input(where + ": byte " + std::to_string(*bad) + ": " + what + " are not valid UTF-8");
-  std::unordered_map<ParticleId, std::uint32_t, DigestHash> by_id;
-  by_id.reserve(s.particles.size());
-  for (std::size_t i = 0; i < s.particles.size(); ++i) by_id.emplace(s.particles[i], static_cast<std::uint32_t>(i));
-  std::unordered_map<std::string_view, std::uint32_t> by_name;
-  if (!strict) {
-    by_name.reserve(s.names.size());
-    for (std::size_t i = 0; i < s.names.size(); ++i) by_name.emplace(s.names[i], static_cast<std::uint32_t>(i));
-  }
+  const IdIndex by_id = IdIndex::over(s.particles);
+  const NameIndex by_name = strict ? NameIndex() : NameIndex::over(s.names);
   std::vector<bool> seen(s.particles.size(), false);
   if (kind == SideKind::kTitles && s.titles.size() != s.particles.size()) s.titles.assign(s.particles.size(), {});
   if (kind == SideKind::kCrystal && s.crystal.size() != s.particles.size()) s.crystal.assign(s.particles.size(), {});
@@ -54,10 +35,10 @@ Status apply_side_text(Snapshot& s, std::string_view text, const std::string& wh
       return Status::input(at + "expected " + std::to_string(want) + " tab-separated fields, found " + std::to_string(f.size()));
     std::optional<std::uint32_t> index;
     ParticleId id;
-    if (auto it = by_name.find(f[0]); it != by_name.end()) {
-      index = it->second;
+    if (const std::int64_t k = by_name.find(f[0], s.names); k >= 0) {
+      index = static_cast<std::uint32_t>(k);
     } else if (hemera::from_hex(f[0], id)) {
-      if (auto jt = by_id.find(id); jt != by_id.end()) index = jt->second;
+      if (const std::int64_t j = by_id.find(id, s.particles); j >= 0) index = static_cast<std::uint32_t>(j);
     } else if (strict) {
       return Status::input(at + "'" + std::string(f[0].substr(0, 80)) + "' is not a 64-hex-digit particle id");
     }

@@ -18,33 +18,16 @@ SnapshotConfig text_input_config() {
   return c;
 }
 
-std::size_t SnapshotBuilder::IdHash::operator()(const ParticleId& id) const noexcept {
-  // Ids are Hemera digests, already uniform: any 8 bytes make a good hash.
-  std::size_t h;
-  std::memcpy(&h, id.data(), sizeof h);
-  return h;
-}
-
 SnapshotBuilder::SnapshotBuilder(std::string source) { s_.source = std::move(source); }
 
 std::uint32_t SnapshotBuilder::particle_by_name(std::string_view name) {
   named_ = true;
-  auto [it, inserted] = by_name_.try_emplace(std::string(name), static_cast<std::uint32_t>(s_.names.size()));
-  if (inserted) s_.names.emplace_back(name);
-  return it->second;
+  return by_name_.intern(name, s_.names);
 }
 
-std::uint32_t SnapshotBuilder::particle_by_id(const ParticleId& id) {
-  auto [it, inserted] = by_id_.try_emplace(id, static_cast<std::uint32_t>(s_.particles.size()));
-  if (inserted) s_.particles.push_back(id);
-  return it->second;
-}
+std::uint32_t SnapshotBuilder::particle_by_id(const ParticleId& id) { return by_id_.intern(id, s_.particles); }
 
-std::uint32_t SnapshotBuilder::neuron_by_id(const NeuronId& id) {
-  auto [it, inserted] = neuron_by_id_.try_emplace(id, static_cast<std::uint32_t>(s_.neurons.size()));
-  if (inserted) s_.neurons.push_back(id);
-  return it->second;
-}
+std::uint32_t SnapshotBuilder::neuron_by_id(const NeuronId& id) { return neuron_by_id_.intern(id, s_.neurons); }
 
 std::size_t SnapshotBuilder::particle_count() const { return named_ ? s_.names.size() : s_.particles.size(); }
 
@@ -68,12 +51,13 @@ Result<Snapshot> SnapshotBuilder::finish(const ProgressFn& progress) {
     }
     // Two names with one id would make two particles one: impossible short of a Hemera collision,
     // but checked because everything downstream assumes distinct ids.
-    std::unordered_map<ParticleId, std::uint32_t, IdHash> seen;
-    seen.reserve(n);
+    IdIndex seen;
+    std::vector<ParticleId> distinct;
+    distinct.reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
-      auto [it, inserted] = seen.try_emplace(s_.particles[i], static_cast<std::uint32_t>(i));
-      if (!inserted)
-        return Status::input(s_.source + ": particles '" + s_.names[it->second] + "' and '" + s_.names[i] +
+      const std::uint32_t first = seen.intern(s_.particles[i], distinct);
+      if (first != i)
+        return Status::input(s_.source + ": particles '" + s_.names[first] + "' and '" + s_.names[i] +
                              "' have the same Hemera id");
     }
   }

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
-#include <unordered_map>
 
+#include "r1/reference/intern_index.hpp"
 #include "r1/spec/progress.hpp"
 #include "r1/spec/snapshot.hpp"
 #include "r1/spec/status.hpp"
@@ -31,6 +31,7 @@ class SnapshotBuilder {
   // Appends a link; its from/to/neuron are indices returned above. Text inputs leave neuron 0
   // (the all-zero neuron id) and height 1.
   void add_link(const Link& l);
+  void reserve_links(std::size_t n) { s_.links.reserve(n); }
 
   Snapshot& snapshot() { return s_; }  // config, card, titles, crystal may be set directly
 
@@ -39,14 +40,11 @@ class SnapshotBuilder {
   Result<Snapshot> finish(const ProgressFn& progress = {});
 
  private:
-  struct IdHash {
-    std::size_t operator()(const ParticleId& id) const noexcept;
-  };
   Snapshot s_;
   bool named_ = false;
-  std::unordered_map<std::string, std::uint32_t> by_name_;
-  std::unordered_map<ParticleId, std::uint32_t, IdHash> by_id_;
-  std::unordered_map<NeuronId, std::uint32_t, IdHash> neuron_by_id_;
+  NameIndex by_name_;
+  IdIndex by_id_;
+  IdIndex neuron_by_id_;
 };
 
 }  // namespace r1
