@@ -5,19 +5,23 @@ CMAKE_FLAGS ?=
 R1 := build/cli/r1
 OUT ?= out
 
-.PHONY: all deps build run test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench
+.PHONY: all deps configure build run test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench
 
 all: build
 
 deps:
 	@scripts/install-deps.sh
 
-build: deps
+configure: deps
 	@cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DR1_WERROR=ON $(CMAKE_FLAGS) >/dev/null
+
+build: configure
 	@cmake --build build -j $(JOBS)
 
 # The main job on the embedded default graph: generate the crystal graph, then summarise it.
-run: build
+# Builds only the r1 command, so a first run does not wait for the test suites.
+run: configure
+	@cmake --build build -j $(JOBS) --target r1_cli
 	@mkdir -p $(OUT)
 	@$(R1) gen crystal -o $(OUT)/crystal.graph
 	@$(R1) info $(OUT)/crystal.graph

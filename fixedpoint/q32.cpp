@@ -221,14 +221,21 @@ std::optional<Q32> Q32::checked_from_decimal(std::string_view text) noexcept {
   }
 }
 
+namespace {
+// "-" when negative and the integer part of |raw| / 2^32; the fraction bits go to `frac`.
+std::string sign_and_integer(std::int64_t raw, std::uint64_t& frac) {
+  const bool negative = raw < 0;
+  const std::uint64_t mag = negative ? std::uint64_t{0} - static_cast<std::uint64_t>(raw) : static_cast<std::uint64_t>(raw);
+  frac = mag & kFracMask;
+  return (negative ? "-" : "") + std::to_string(mag >> 32);
+}
+}  // namespace
+
 double Q32::to_double() const noexcept { return static_cast<double>(raw) * 0x1p-32; }
 
 std::string Q32::to_string() const {
-  const bool negative = raw < 0;
-  const std::uint64_t mag = negative ? std::uint64_t{0} - static_cast<std::uint64_t>(raw) : static_cast<std::uint64_t>(raw);
-  std::string out = negative ? "-" : "";
-  out += std::to_string(mag >> 32);
-  const std::uint64_t f = mag & kFracMask;
+  std::uint64_t f = 0;
+  std::string out = sign_and_integer(raw, f);
   if (f == 0) return out;
   // The k-digit decimal nearest to f / 2^32 is the only k-digit candidate that can round back
   // to f (the round-trip interval is contiguous around f). At k = 10 it always does: it is within
@@ -258,11 +265,8 @@ std::string exact_fraction_digits(std::uint32_t f) {
 }
 
 std::string Q32::to_exact_string() const {
-  const bool negative = raw < 0;
-  const std::uint64_t mag = negative ? std::uint64_t{0} - static_cast<std::uint64_t>(raw) : static_cast<std::uint64_t>(raw);
-  std::string out = negative ? "-" : "";
-  out += std::to_string(mag >> 32);
-  const std::uint64_t f = mag & kFracMask;
+  std::uint64_t f = 0;
+  std::string out = sign_and_integer(raw, f);
   if (f == 0) return out;
   return out + "." + exact_fraction_digits(static_cast<std::uint32_t>(f));
 }

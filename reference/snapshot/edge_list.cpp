@@ -91,14 +91,7 @@ Result<Snapshot> read_tsv(std::string_view text, const std::string& file, const 
   std::vector<std::string_view> f;
   while (lines.next(line)) {
     if (line.empty() || line.front() == '#' || text::is_blank(line)) continue;
-    f.clear();
-    std::size_t p = 0;
-    for (;;) {
-      const std::size_t t = line.find('\t', p);
-      f.push_back(line.substr(p, t == std::string_view::npos ? std::string_view::npos : t - p));
-      if (t == std::string_view::npos) break;
-      p = t + 1;
-    }
+    text::split_tabs(line, f);
     R1_TRY(sink.row(f, lines.line_number(), lines.position(), '\t'));
   }
   return sink.finish();

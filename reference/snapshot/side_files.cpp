@@ -19,17 +19,11 @@ Status apply_side_text(Snapshot& s, std::string_view text, const std::string& wh
 
   text::LineReader lines(text::strip_bom(text));
   std::string_view line;
+  std::vector<std::string_view> f;
   while (lines.next(line)) {
     const std::string at = where + ":" + std::to_string(first_line + lines.line_number() - 1) + ": ";
     if (text::is_blank(line) || line.front() == '#') continue;
-    std::vector<std::string_view> f;
-    std::size_t p = 0;
-    for (;;) {
-      const std::size_t t = line.find('\t', p);
-      f.push_back(line.substr(p, t == std::string_view::npos ? std::string_view::npos : t - p));
-      if (t == std::string_view::npos) break;
-      p = t + 1;
-    }
+    text::split_tabs(line, f);
     const std::size_t want = kind == SideKind::kTitles ? 2 : 4;
     if (f.size() != want)
       return Status::input(at + "expected " + std::to_string(want) + " tab-separated fields, found " + std::to_string(f.size()));

@@ -267,6 +267,17 @@ bool LineReader::next(std::string_view& line) {
   return true;
 }
 
+void split_tabs(std::string_view line, std::vector<std::string_view>& out) {
+  out.clear();
+  std::size_t p = 0;
+  for (;;) {
+    const std::size_t t = line.find('\t', p);
+    out.push_back(line.substr(p, t == std::string_view::npos ? std::string_view::npos : t - p));
+    if (t == std::string_view::npos) return;
+    p = t + 1;
+  }
+}
+
 bool is_blank(std::string_view line) {
   return std::all_of(line.begin(), line.end(), [](char c) { return c == ' ' || c == '\t'; });
 }

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "r1/fixedpoint/int128.hpp"
 
@@ -52,6 +53,9 @@ class LineReader {
   std::string_view text_;
   std::size_t pos_ = 0, number_ = 0, offset_ = 0;
 };
+
+// Splits a line on TAB into `out` (cleared first); fields are views into the line.
+void split_tabs(std::string_view line, std::vector<std::string_view>& out);
 
 // True when the line is empty or only spaces and tabs.
 bool is_blank(std::string_view line);
