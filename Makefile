@@ -55,3 +55,6 @@ bench: build
 
 clean:
 	rm -rf build build-asan build-fuzz $(OUT)
+
+install-test: build
+	@scripts/install-test.sh build
