@@ -1,0 +1,124 @@
+// The data an epoch computes (R-1.0 sections 3, 4, 5, 10; spec/epoch.md): parameters with their
+// defaults and the results of each stage. Every stage is a pure function of its inputs; the
+// canonical numeric domain is Q32 (decision 5), fp64 is the second domain.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "r1/fixedpoint/q32.hpp"
+
+namespace r1 {
+
+using fx::Q32;
+
+enum class NumericDomain { kQ32, kFp64 };
+
+// ---- focus (tri-kernel, REFERENCE.md 2) ------------------------------------------------------
+
+struct TriKernelParams {
+  // Defaults of the tru reference code; every one is a command-line option of `r1 epoch`.
+  Q32 lambda_d = Q32::from_decimal("0.5");   // diffusion weight
+  Q32 lambda_s = Q32::from_decimal("0.3");   // springs weight
+  Q32 lambda_h = Q32::from_decimal("0.2");   // heat weight
+  Q32 teleport = Q32::from_decimal("0.15");  // diffusion teleport t
+  Q32 mu = Q32::from_int(1);                 // springs screening
+  Q32 tau = Q32::from_int(1);                // heat time
+  Q32 eps = Q32::from_decimal("0.000001");   // target error for T(eps)
+  std::uint32_t max_steps = 500;             // cap on T(eps)
+  std::uint32_t chebyshev_degree = 8;        // heat kernel polynomial degree K
+};
+
+template <class Scalar>  // fx::Q32 (canonical) or double
+struct Focus {
+  std::vector<Scalar> phi;        // per particle, canonical order. Q32: raws sum to exactly 2^32, all > 0
+  std::uint32_t steps = 0;        // T(eps) actually run
+  double kappa = 0;               // contraction estimate that fixed T(eps)
+  double lambda_max = 0;          // largest eigenvalue of L = D - A_sym (power iteration)
+  double syntropy = 0;            // KL(phi || uniform), nats
+  std::vector<std::uint32_t> cyberank;  // particle indices by phi descending, ties by lower index
+};
+
+// ---- spectral embedding (R-1.0 3) ------------------------------------------------------------
+
+struct SpectralParams {
+  std::optional<double> rho;      // regularisation (decision 4); unset = auto: 0 if connected, else mean weighted degree
+  std::uint32_t basis = 32;       // Krylov basis size per restart cycle (R-1.0 3.2: k = 32)
+  double tolerance = 1e-9;        // residual target ||L u - lambda u|| for the wanted pairs
+  std::uint32_t max_restarts = 0; // 0 = the solver's documented default
+};
+
+template <class Scalar>
+struct Spectrum {
+  std::uint32_t n = 0;
+  double rho = 0;                             // the regularisation actually used
+  std::array<double, 6> eigenvalues{};        // lambda_1..lambda_6 of the normalized Laplacian (lambda_1 = 0)
+  std::array<double, 6> residuals{};          // ||L u - lambda u|| of each (u_1 = D^(1/2) 1 normalised)
+  std::array<std::vector<Scalar>, 5> u;       // u_2..u_6, unit 2-norm, per particle; missing ones all 0
+  std::uint32_t found = 0;                    // how many of u_2..u_6 exist (n - 1 when n < 7)
+  std::uint32_t restarts = 0, matvecs = 0;    // work done, for the manifest
+};
+
+// ---- frame (R-1.0 4, decision 7) ---------------------------------------------------------------
+
+inline constexpr std::int64_t kSceneRadius = 1000;  // R_scene
+
+struct Alignment {
+  bool genesis = true;               // no anchor given: sign convention + scale only
+  std::array<double, 9> rotation{};  // row-major Q (right-handed after SC-R)
+  double scale = 1;                  // s
+  std::array<double, 3> translation{};
+  bool reflected = false;            // SC-R flipped the third axis
+  std::uint32_t matched = 0;         // anchor particles found in this snapshot
+  double rms = 0;                    // RMS distance over the matched anchor after alignment
+};
+
+struct Frame {
+  std::vector<std::array<Q32, 3>> position;  // X'(p), scene units (|X'| <= R_scene at genesis)
+  double scale = 0;                          // R_scene / max |X(p)| applied to the raw eigenvectors
+  Alignment alignment;
+};
+
+// ---- visual encoding (R-1.0 5) ---------------------------------------------------------------
+
+enum class Role : std::uint8_t { kNone = 0, kHub = 1, kBridge = 2, kLeaf = 3 };
+enum class Shape : std::uint8_t { kSphere = 0, kTorus = 1, kTetrahedron = 2, kCube = 3, kOctahedron = 4, kCylinder = 5 };
+
+struct Encoding {
+  std::vector<Q32> radius;                     // r0 sqrt(phi) (times the overlay's size multiplier)
+  std::vector<Q32> luminosity;                 // L0 phi: raws sum to exactly L0's raw
+  std::vector<Q32> hue;                        // turns in [0, 1): angle of (u5, u6) / 2 pi
+  std::vector<Q32> saturation;                 // [0, 1]
+  std::vector<Role> role;
+  std::vector<Shape> shape;
+  std::vector<std::array<std::uint8_t, 3>> color;  // display sRGB, 8 bits per channel
+  std::string overlay = "none";                // none | crystal-v5 | custom
+};
+
+// ---- hierarchy (R-1.0 10) ----------------------------------------------------------------------
+
+inline constexpr int kLevels = 4;
+inline constexpr int kMaxChildren = 16;
+
+struct ClusterNode {
+  std::uint32_t level = 0;                 // 0 finest .. 3 coarsest
+  std::uint32_t id = 0;                    // canonical id within the level (R-1.0 10.2)
+  std::uint32_t parent = 0xFFFFFFFFu;      // id at level + 1; none for level 3
+  std::vector<std::uint32_t> children;     // level 0: particle indices; else ids at level - 1; <= 16
+  std::array<Q32, 3> lo{}, hi{};           // AABB of the contained particles' positions
+  std::int64_t phi_raw = 0;                // sum of the members' Q32 phi raws (exact)
+  std::array<std::uint8_t, 3> color{};     // dominant colour (R-1.0 10.1)
+  std::uint32_t particles = 0;             // members (all levels below)
+};
+
+struct Hierarchy {
+  std::array<std::vector<ClusterNode>, kLevels> levels;            // index = canonical id
+  std::array<std::vector<std::uint32_t>, kLevels> cluster_of;      // per particle: its cluster id per level
+  std::array<std::int64_t, kLevels> radius_raw{};                  // clustering radius per level (Q32 raw, scene units)
+  double tau0 = 0;                                                 // the finest heat-kernel scale used
+};
+
+}  // namespace r1
