@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "r1/fixedpoint/hemera.hpp"
 #include "r1/fixedpoint/q32.hpp"
 
 namespace r1 {
@@ -119,6 +120,36 @@ struct Hierarchy {
   std::array<std::vector<std::uint32_t>, kLevels> cluster_of;      // per particle: its cluster id per level
   std::array<std::int64_t, kLevels> radius_raw{};                  // clustering radius per level (Q32 raw, scene units)
   double tau0 = 0;                                                 // the finest heat-kernel scale used
+};
+
+}  // namespace r1
+
+// ---- the epoch as a whole (spec/epoch.md) -------------------------------------------------------
+
+namespace r1 {
+
+struct StageTiming {
+  std::string stage;
+  double seconds = 0;
+};
+
+// Everything an epoch publishes (R1-EPO-010): what `r1 epoch` writes and `read_epoch` returns.
+struct Epoch {
+  std::string source;                      // snapshot path as given
+  hemera::Digest snapshot_digest{};        // R1-IN-040
+  NumericDomain domain = NumericDomain::kQ32;
+  std::vector<hemera::Digest> ids;         // particles, canonical order
+  std::vector<std::string> titles;         // display title per particle ("" = none)
+  std::uint64_t links = 0;
+  std::uint64_t components = 0;
+  TriKernelParams trikernel;
+  SpectralParams spectral_params;
+  Focus<Q32> focus;                        // Q32 whatever the domain (fp64 phi projected, R1-EPO-004)
+  Spectrum<Q32> spectrum;                  // u_2..u_6 after the sign convention
+  Frame frame;
+  Encoding encoding;
+  Hierarchy hierarchy;
+  std::vector<StageTiming> timings;
 };
 
 }  // namespace r1

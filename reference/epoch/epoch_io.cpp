@@ -1,0 +1,380 @@
+// The epoch directory: canonical arrays, manifest, atomic write, validated read, TSV export
+// (R1-EPO-010..020).
+#include "r1/reference/epoch_io.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+
+#include "../snapshot/text_util.hpp"
+#include "r1/reference/atomic_dir.hpp"
+#include "r1/reference/input_file.hpp"
+
+namespace r1 {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kFormat = "r1-epoch";
+constexpr int kVersion = 1;
+
+void put_i64(std::string& out, std::int64_t v) {
+  for (int b = 0; b < 8; ++b) out.push_back(static_cast<char>(static_cast<std::uint64_t>(v) >> (8 * b)));
+}
+void put_u32(std::string& out, std::uint32_t v) {
+  for (int b = 0; b < 4; ++b) out.push_back(static_cast<char>(v >> (8 * b)));
+}
+std::int64_t get_i64(const char* p) {
+  std::uint64_t v = 0;
+  for (int b = 0; b < 8; ++b) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[b])) << (8 * b);
+  return static_cast<std::int64_t>(v);
+}
+std::uint32_t get_u32(const char* p) {
+  std::uint32_t v = 0;
+  for (int b = 0; b < 4; ++b) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(p[b])) << (8 * b);
+  return v;
+}
+
+std::string q32_column(const std::vector<Q32>& v) {
+  std::string o;
+  o.reserve(v.size() * 8);
+  for (Q32 q : v) put_i64(o, q.raw);
+  return o;
+}
+
+std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
+
+std::string file_digest(std::string_view bytes) {
+  return hex(hemera::root_hash(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size())));
+}
+
+const char* role_name(Role r) {
+  switch (r) {
+    case Role::kHub: return "hub";
+    case Role::kBridge: return "bridge";
+    case Role::kLeaf: return "leaf";
+    case Role::kNone: break;
+  }
+  return "none";
+}
+
+const char* domain_name(NumericDomain d) { return d == NumericDomain::kQ32 ? "q32" : "fp64"; }
+
+// Q32 parameters as their exact decimal strings: a JSON number would pass through a double.
+json q32_json(Q32 q) { return q.to_exact_string(); }
+
+bool is_epoch_dir(const fs::path& dir) {
+  std::ifstream f(dir / "manifest.json");
+  if (!f) return false;
+  try {
+    return json::parse(f).value("format", "") == kFormat;
+  } catch (const json::exception&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> epoch_files(const Epoch& e) {
+  const std::size_t n = e.ids.size();
+  std::vector<std::pair<std::string, std::string>> f;
+  {
+    std::string ids;
+    ids.reserve(n * 32);
+    for (const auto& id : e.ids) ids.append(reinterpret_cast<const char*>(id.data()), id.size());
+    f.emplace_back("particles.ids", std::move(ids));
+  }
+  {
+    std::string t;
+    for (std::size_t i = 0; i < n && i < e.titles.size(); ++i)
+      if (!e.titles[i].empty()) t += hex(e.ids[i]) + "\t" + text::escape_cell(e.titles[i]) + "\n";
+    f.emplace_back("titles.tsv", std::move(t));
+  }
+  f.emplace_back("focus.q32", q32_column(e.focus.phi));
+  {
+    std::string s;
+    s.reserve(n * 5 * 8);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = 0; k < 5; ++k) put_i64(s, e.spectrum.u[k][i].raw);
+    f.emplace_back("spectral.q32", std::move(s));
+  }
+  {
+    std::string s;
+    s.reserve(n * 3 * 8);
+    for (const auto& p : e.frame.position)
+      for (Q32 c : p) put_i64(s, c.raw);
+    f.emplace_back("positions.q32", std::move(s));
+  }
+  f.emplace_back("radius.q32", q32_column(e.encoding.radius));
+  f.emplace_back("luminosity.q32", q32_column(e.encoding.luminosity));
+  f.emplace_back("hue.q32", q32_column(e.encoding.hue));
+  f.emplace_back("saturation.q32", q32_column(e.encoding.saturation));
+  {
+    std::string r, s, c;
+    for (Role x : e.encoding.role) r.push_back(static_cast<char>(x));
+    for (Shape x : e.encoding.shape) s.push_back(static_cast<char>(x));
+    for (const auto& rgb : e.encoding.color) c.append(reinterpret_cast<const char*>(rgb.data()), 3);
+    f.emplace_back("role.u8", std::move(r));
+    f.emplace_back("shape.u8", std::move(s));
+    f.emplace_back("color.rgb8", std::move(c));
+  }
+  {
+    std::string s;
+    s.reserve(n * kLevels * 4);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t l = 0; l < kLevels; ++l) put_u32(s, e.hierarchy.cluster_of[l][i]);
+    f.emplace_back("clusters.u32", std::move(s));
+  }
+  return f;
+}
+
+std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::string, std::string>>& files,
+                           const EpochWriteOptions& o) {
+  json m;
+  m["format"] = kFormat;
+  m["version"] = kVersion;
+  m["snapshot"] = {{"source", e.source},
+                   {"digest", hex(e.snapshot_digest)},
+                   {"particles", e.ids.size()},
+                   {"links", e.links},
+                   {"components", e.components}};
+  m["domain"] = domain_name(e.domain);
+  const TriKernelParams& t = e.trikernel;
+  m["parameters"] = {{"lambda_d", q32_json(t.lambda_d)},
+                     {"lambda_s", q32_json(t.lambda_s)},
+                     {"lambda_h", q32_json(t.lambda_h)},
+                     {"teleport", q32_json(t.teleport)},
+                     {"mu", q32_json(t.mu)},
+                     {"tau", q32_json(t.tau)},
+                     {"eps", q32_json(t.eps)},
+                     {"max_steps", t.max_steps},
+                     {"chebyshev_degree", t.chebyshev_degree},
+                     {"rho", e.spectral_params.rho ? json(*e.spectral_params.rho) : json("auto")},
+                     {"basis", e.spectral_params.basis},
+                     {"tolerance", e.spectral_params.tolerance},
+                     {"overlay", e.encoding.overlay}};
+  m["eigenvalues"] = e.spectrum.eigenvalues;
+  m["residuals"] = e.spectrum.residuals;
+  m["found"] = e.spectrum.found;
+  m["rho"] = e.spectrum.rho;
+  m["spectral_work"] = {{"restarts", e.spectrum.restarts}, {"matvecs", e.spectrum.matvecs}};
+  m["scale"] = e.frame.scale;
+  const Alignment& a = e.frame.alignment;
+  m["alignment"] = {{"genesis", a.genesis},         {"rotation", a.rotation},   {"scale", a.scale},
+                    {"translation", a.translation}, {"reflected", a.reflected}, {"matched", a.matched},
+                    {"rms", a.rms}};
+  json top = json::array();
+  for (std::size_t k = 0; k < e.focus.cyberank.size() && k < 10; ++k) {
+    const std::uint32_t i = e.focus.cyberank[k];
+    top.push_back({{"particle", hex(e.ids[i])},
+                   {"title", i < e.titles.size() ? e.titles[i] : ""},
+                   {"focus", e.focus.phi[i].to_string()}});
+  }
+  m["focus"] = {{"steps", e.focus.steps},
+                {"kappa", e.focus.kappa},
+                {"lambda_max", e.focus.lambda_max},
+                {"syntropy", e.focus.syntropy},
+                {"top", top}};
+  json counts = json::array(), radii = json::array();
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    counts.push_back(e.hierarchy.levels[l].size());
+    radii.push_back(Q32::from_raw(e.hierarchy.radius_raw[l]).to_string());
+  }
+  m["hierarchy"] = {{"tau0", e.hierarchy.tau0}, {"radii", radii}, {"clusters_per_level", counts}};
+  json fj = json::object();
+  for (const auto& [name, bytes] : files) {
+    fj[name] = {{"bytes", bytes.size()}, {"hemera", file_digest(bytes)}};
+    if (name == "hierarchy.bin") m["topology_digest"] = file_digest(bytes);
+    if (name == "anchor.bin") m["anchor_digest"] = file_digest(bytes);
+  }
+  m["files"] = fj;
+  if (o.timings) {
+    json tj = json::object();
+    for (const auto& st : e.timings) tj[st.stage] = st.seconds;
+    m["timings_s"] = tj;
+  }
+  return m.dump(2) + "\n";
+}
+
+Status write_epoch(const Epoch& e, const fs::path& dir, const EpochWriteOptions& o) {
+  const auto files = epoch_files(e);
+  AtomicDirectory out(dir, is_epoch_dir);
+  R1_TRY(out.open());
+  for (const auto& [name, bytes] : files) R1_TRY(out.write(name, bytes));
+  R1_TRY(out.write("manifest.json", epoch_manifest(e, files, o)));
+  return out.commit();
+}
+
+namespace {
+
+// The manifest-listed files of an epoch directory, each checked against its size and digest.
+class EpochFiles {
+ public:
+  EpochFiles(fs::path dir, std::size_t n) : dir_(std::move(dir)), n_(n) {}
+
+  Status load(const json& listed) {
+    for (const auto& [name, info] : listed.items()) {
+      const fs::path p = dir_ / name;
+      R1_ASSIGN(auto f, InputFile::open(p.string()));
+      const auto bytes = info.at("bytes").get<std::size_t>();
+      if (f->bytes().size() != bytes)
+        return Status::input(p.string() + ": " + std::to_string(f->bytes().size()) + " bytes, the manifest says " +
+                             std::to_string(bytes) + " (truncated or replaced?)");
+      if (file_digest(f->text()) != info.at("hemera").get<std::string>())
+        return Status::input(p.string() + ": Hemera digest differs from the manifest (the file was modified)");
+      data_.emplace(name, std::move(f));
+    }
+    return Status::ok();
+  }
+
+  // The bytes of `name`, which must hold n rows of `per_row` bytes.
+  Result<std::string_view> rows(const std::string& name, std::size_t per_row) const {
+    auto it = data_.find(name);
+    if (it == data_.end()) return Status::input((dir_ / name).string() + ": not listed in the manifest");
+    if (it->second->bytes().size() != n_ * per_row)
+      return Status::input((dir_ / name).string() + ": " + std::to_string(it->second->bytes().size()) + " bytes for " +
+                           std::to_string(n_) + " particles (expected " + std::to_string(n_ * per_row) + ")");
+    return it->second->text();
+  }
+
+  const InputFile* find(const std::string& name) const {
+    auto it = data_.find(name);
+    return it == data_.end() ? nullptr : it->second.get();
+  }
+
+ private:
+  fs::path dir_;
+  std::size_t n_;
+  std::map<std::string, std::unique_ptr<InputFile>> data_;
+};
+
+std::vector<Q32> q32_rows(std::string_view b, std::size_t n, std::size_t stride, std::size_t k) {
+  std::vector<Q32> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = Q32::from_raw(get_i64(b.data() + (i * stride + k) * 8));
+  return v;
+}
+
+Status read_titles(const InputFile& f, const std::string& where, Epoch& e) {
+  std::map<hemera::Digest, std::size_t> index;
+  for (std::size_t i = 0; i < e.ids.size(); ++i) index.emplace(e.ids[i], i);
+  text::LineReader lines(f.text());
+  std::string_view line;
+  while (lines.next(line)) {
+    const std::string at = where + ":" + std::to_string(lines.line_number()) + ": ";
+    const auto tab = line.find('\t');
+    hemera::Digest id{};
+    if (tab == std::string_view::npos || !hemera::from_hex(line.substr(0, tab), id))
+      return Status::input(at + "expected a 64-hex id, TAB, title");
+    auto title = text::unescape_cell(line.substr(tab + 1));
+    const auto it = index.find(id);
+    if (!title || it == index.end()) return Status::input(at + "title for an unknown particle or with a bad escape");
+    e.titles[it->second] = std::move(*title);
+  }
+  return Status::ok();
+}
+
+Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
+  const std::string manifest = (dir / "manifest.json").string();
+  if (m.value("format", "") != kFormat) return Status::input(manifest + ": not an r1 epoch manifest");
+  if (m.value("version", 0) != kVersion)
+    return Status::input(manifest + ": epoch version " + std::to_string(m.value("version", 0)) +
+                         " is not supported (r1 reads version 1)");
+  Epoch e;
+  const std::size_t n = m.at("snapshot").at("particles").get<std::size_t>();
+  e.source = m.at("snapshot").at("source").get<std::string>();
+  if (!hemera::from_hex(m.at("snapshot").at("digest").get<std::string>(), e.snapshot_digest))
+    return Status::input(manifest + ": snapshot digest is not 64 hex digits");
+  e.links = m.at("snapshot").at("links").get<std::uint64_t>();
+  e.components = m.at("snapshot").at("components").get<std::uint64_t>();
+  e.domain = m.at("domain").get<std::string>() == "fp64" ? NumericDomain::kFp64 : NumericDomain::kQ32;
+  e.spectrum.eigenvalues = m.at("eigenvalues").get<std::array<double, 6>>();
+  e.spectrum.residuals = m.at("residuals").get<std::array<double, 6>>();
+  e.spectrum.found = m.at("found").get<std::uint32_t>();
+  e.spectrum.rho = m.at("rho").get<double>();
+  e.frame.scale = m.at("scale").get<double>();
+  e.encoding.overlay = m.at("parameters").at("overlay").get<std::string>();
+
+  EpochFiles files(dir, n);
+  R1_TRY(files.load(m.at("files")));
+  R1_ASSIGN(const std::string_view ids, files.rows("particles.ids", 32));
+  e.ids.resize(n);
+  for (std::size_t i = 0; i < n; ++i) std::memcpy(e.ids[i].data(), ids.data() + i * 32, 32);
+  R1_ASSIGN(const std::string_view focus, files.rows("focus.q32", 8));
+  e.focus.phi = q32_rows(focus, n, 1, 0);
+  R1_ASSIGN(const std::string_view spectral, files.rows("spectral.q32", 40));
+  for (std::size_t k = 0; k < 5; ++k) e.spectrum.u[k] = q32_rows(spectral, n, 5, k);
+  R1_ASSIGN(const std::string_view pos, files.rows("positions.q32", 24));
+  e.frame.position.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < 3; ++k) e.frame.position[i][k] = Q32::from_raw(get_i64(pos.data() + (i * 3 + k) * 8));
+  R1_ASSIGN(const std::string_view radius, files.rows("radius.q32", 8));
+  R1_ASSIGN(const std::string_view lum, files.rows("luminosity.q32", 8));
+  R1_ASSIGN(const std::string_view hue, files.rows("hue.q32", 8));
+  R1_ASSIGN(const std::string_view sat, files.rows("saturation.q32", 8));
+  e.encoding.radius = q32_rows(radius, n, 1, 0);
+  e.encoding.luminosity = q32_rows(lum, n, 1, 0);
+  e.encoding.hue = q32_rows(hue, n, 1, 0);
+  e.encoding.saturation = q32_rows(sat, n, 1, 0);
+  R1_ASSIGN(const std::string_view role, files.rows("role.u8", 1));
+  R1_ASSIGN(const std::string_view shape, files.rows("shape.u8", 1));
+  R1_ASSIGN(const std::string_view color, files.rows("color.rgb8", 3));
+  e.encoding.role.resize(n);
+  e.encoding.shape.resize(n);
+  e.encoding.color.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto r = static_cast<std::uint8_t>(role[i]), s = static_cast<std::uint8_t>(shape[i]);
+    if (r > 3) return Status::input((dir / "role.u8").string() + ": byte " + std::to_string(i) + ": unknown role " + std::to_string(r));
+    if (s > 5) return Status::input((dir / "shape.u8").string() + ": byte " + std::to_string(i) + ": unknown shape " + std::to_string(s));
+    e.encoding.role[i] = static_cast<Role>(r);
+    e.encoding.shape[i] = static_cast<Shape>(s);
+    std::memcpy(e.encoding.color[i].data(), color.data() + 3 * i, 3);
+  }
+  R1_ASSIGN(const std::string_view clusters, files.rows("clusters.u32", 4 * kLevels));
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    e.hierarchy.cluster_of[l].resize(n);
+    for (std::size_t i = 0; i < n; ++i) e.hierarchy.cluster_of[l][i] = get_u32(clusters.data() + (i * kLevels + l) * 4);
+  }
+  e.titles.assign(n, {});
+  if (const InputFile* t = files.find("titles.tsv")) R1_TRY(read_titles(*t, (dir / "titles.tsv").string(), e));
+  return e;
+}
+
+}  // namespace
+
+Result<Epoch> read_epoch(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return Status::input(dir.string() + ": not an epoch directory (make one with r1 epoch)");
+  R1_ASSIGN(auto mf, InputFile::open((dir / "manifest.json").string()));
+  try {
+    return read_epoch_json(dir, json::parse(mf->text()));
+  } catch (const json::exception& ex) {
+    return Status::input((dir / "manifest.json").string() + ": malformed manifest: " + ex.what());
+  }
+}
+
+std::string export_tsv(const Epoch& e) {
+  std::string o =
+      "particle\ttitle\tx\ty\tz\tu5\tu6\tfocus\tradius\tluminosity\thue\tsaturation\trole\tcluster0\tcluster1\tcluster2\tcluster3\n";
+  for (std::size_t i = 0; i < e.ids.size(); ++i) {
+    o += hex(e.ids[i]);
+    o += '\t';
+    o += text::escape_cell(i < e.titles.size() ? e.titles[i] : "");
+    for (Q32 c : e.frame.position[i]) o += "\t" + c.to_string();
+    o += "\t" + e.spectrum.u[3][i].to_string() + "\t" + e.spectrum.u[4][i].to_string();
+    o += "\t" + e.focus.phi[i].to_string();
+    o += "\t" + e.encoding.radius[i].to_string() + "\t" + e.encoding.luminosity[i].to_string();
+    o += "\t" + e.encoding.hue[i].to_string() + "\t" + e.encoding.saturation[i].to_string();
+    o += "\t";
+    o += role_name(e.encoding.role[i]);
+    for (std::size_t l = 0; l < kLevels; ++l) o += "\t" + std::to_string(e.hierarchy.cluster_of[l][i]);
+    o += '\n';
+  }
+  return o;
+}
+
+}  // namespace r1

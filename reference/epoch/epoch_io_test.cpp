@@ -1,0 +1,126 @@
+// The epoch directory: round trip, digests, atomic replacement, refusal to clobber, export
+// (R1-EPO-010..020).
+#include "r1/reference/epoch_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using r1::Q32;
+
+// A small synthetic epoch with every array filled by a simple rule.
+r1::Epoch synthetic(std::size_t n) {
+  r1::Epoch e;
+  e.source = "synthetic";
+  e.snapshot_digest = r1::hemera::hash("snapshot");
+  e.links = 3 * n;
+  e.components = 1;
+  for (std::size_t i = 0; i < n; ++i) {
+    e.ids.push_back(r1::hemera::hash("p" + std::to_string(i)));
+    e.titles.push_back(i % 3 == 0 ? "title\t" + std::to_string(i) : "");
+    e.focus.phi.push_back(Q32::from_raw(static_cast<std::int64_t>(i + 1)));
+    e.frame.position.push_back({Q32::from_int(static_cast<std::int64_t>(i)), Q32::from_raw(-5), Q32::from_decimal("0.25")});
+    e.encoding.radius.push_back(Q32::from_raw(static_cast<std::int64_t>(7 * i)));
+    e.encoding.luminosity.push_back(Q32::from_raw(static_cast<std::int64_t>(i + 1)));
+    e.encoding.hue.push_back(Q32::from_decimal("0.5"));
+    e.encoding.saturation.push_back(Q32::one());
+    e.encoding.role.push_back(static_cast<r1::Role>(i % 4));
+    e.encoding.shape.push_back(static_cast<r1::Shape>(i % 6));
+    e.encoding.color.push_back({static_cast<std::uint8_t>(i), 2, 3});
+  }
+  for (std::size_t k = 0; k < 5; ++k)
+    for (std::size_t i = 0; i < n; ++i) e.spectrum.u[k].push_back(Q32::from_raw(static_cast<std::int64_t>(k * 1000 + i) - 50));
+  for (std::size_t l = 0; l < r1::kLevels; ++l)
+    for (std::size_t i = 0; i < n; ++i) e.hierarchy.cluster_of[l].push_back(static_cast<std::uint32_t>(i >> (2 * l)));
+  e.focus.cyberank = {2, 1, 0};
+  e.spectrum.eigenvalues = {0, 0.1, 0.2, 0.3, 0.4, 0.5};
+  e.timings = {{"spectral", 1.5}};
+  return e;
+}
+
+TEST(EpochIo, WriteReadRoundTrip) {
+  r1::test::TempDir d;
+  const auto e = synthetic(10);
+  ASSERT_TRUE(r1::write_epoch(e, d / "ep").is_ok());
+  auto back = r1::read_epoch(d / "ep");
+  ASSERT_TRUE(back.is_ok()) << back.status().message();
+  EXPECT_EQ(back->ids, e.ids);
+  EXPECT_EQ(back->titles, e.titles);
+  EXPECT_EQ(back->focus.phi, e.focus.phi);
+  EXPECT_EQ(back->frame.position, e.frame.position);
+  EXPECT_EQ(back->spectrum.u, e.spectrum.u);
+  EXPECT_EQ(back->encoding.role, e.encoding.role);
+  EXPECT_EQ(back->encoding.color, e.encoding.color);
+  EXPECT_EQ(back->hierarchy.cluster_of, e.hierarchy.cluster_of);
+  EXPECT_EQ(back->spectrum.eigenvalues, e.spectrum.eigenvalues);
+  // Rewriting what was read gives the same files.
+  r1::EpochWriteOptions quiet;
+  quiet.timings = false;
+  ASSERT_TRUE(r1::write_epoch(*back, d / "again", quiet).is_ok());
+  EXPECT_EQ(r1::test::read_file(d / "ep/positions.q32"), r1::test::read_file(d / "again/positions.q32"));
+}
+
+TEST(EpochIo, WithoutTimingsEveryByteIsReproducible) {
+  r1::test::TempDir d;
+  auto e = synthetic(5);
+  r1::EpochWriteOptions quiet;
+  quiet.timings = false;
+  ASSERT_TRUE(r1::write_epoch(e, d / "a", quiet).is_ok());
+  e.timings = {{"spectral", 99.0}};
+  ASSERT_TRUE(r1::write_epoch(e, d / "b", quiet).is_ok());
+  EXPECT_EQ(r1::test::read_file(d / "a/manifest.json"), r1::test::read_file(d / "b/manifest.json"));
+  const auto m = nlohmann::json::parse(r1::test::read_file(d / "a/manifest.json"));
+  EXPECT_FALSE(m.contains("timings_s"));
+  EXPECT_EQ(m["files"]["focus.q32"]["bytes"], 5 * 8);
+}
+
+TEST(EpochIo, ModifiedOrTruncatedFilesAreRefused) {
+  r1::test::TempDir d;
+  ASSERT_TRUE(r1::write_epoch(synthetic(6), d / "ep").is_ok());
+  std::string pos = r1::test::read_file(d / "ep/positions.q32");
+  pos[3] ^= 1;
+  r1::test::write_file(d / "ep/positions.q32", pos);
+  auto r = r1::read_epoch(d / "ep");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("positions.q32: Hemera digest differs"), std::string::npos) << r.status().message();
+  r1::test::write_file(d / "ep/positions.q32", pos.substr(0, 10));
+  r = r1::read_epoch(d / "ep");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("truncated"), std::string::npos) << r.status().message();
+  fs::remove(d / "ep/role.u8");
+  EXPECT_FALSE(r1::read_epoch(d / "ep").is_ok());
+  EXPECT_FALSE(r1::read_epoch(d / "nothing").is_ok());
+}
+
+TEST(EpochIo, ReplacesAnEpochButNeverOtherDirectories) {
+  r1::test::TempDir d;
+  ASSERT_TRUE(r1::write_epoch(synthetic(4), d / "ep").is_ok());
+  ASSERT_TRUE(r1::write_epoch(synthetic(8), d / "ep").is_ok());  // atomic exchange
+  auto r = r1::read_epoch(d / "ep");
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->ids.size(), 8u);
+  fs::create_directory(d / "mine");
+  r1::test::write_file(d / "mine/notes.txt", "precious");
+  const auto s = r1::write_epoch(synthetic(4), d / "mine");
+  EXPECT_EQ(s.kind(), r1::ErrorKind::kOutput);
+  EXPECT_EQ(r1::test::read_file(d / "mine/notes.txt"), "precious");
+  // No temporaries left beside the targets.
+  for (const auto& entry : fs::directory_iterator(d.path())) EXPECT_NE(entry.path().filename().string()[0], '.');
+}
+
+TEST(EpochIo, ExportHasTheDocumentedColumns) {
+  const auto e = synthetic(3);
+  const std::string tsv = r1::export_tsv(e);
+  EXPECT_EQ(tsv.substr(0, tsv.find('\n')),
+            "particle\ttitle\tx\ty\tz\tu5\tu6\tfocus\tradius\tluminosity\thue\tsaturation\trole\tcluster0\tcluster1\tcluster2\tcluster3");
+  const std::string row0 = tsv.substr(tsv.find('\n') + 1, tsv.find('\n', tsv.find('\n') + 1) - tsv.find('\n') - 1);
+  EXPECT_EQ(row0.rfind(r1::hemera::to_hex(e.ids[0]) + "\ttitle\\t0\t0\t", 0), 0u) << row0;
+  EXPECT_NE(row0.find("\tnone\t0\t0\t0\t0"), std::string::npos) << row0;
+}
+
+}  // namespace

@@ -1,0 +1,28 @@
+// The epoch directory: writing it atomically, reading and validating it, exporting TSV
+// (R1-EPO-010..020).
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1 {
+
+struct EpochWriteOptions {
+  bool timings = true;  // R1-EPO-013: false leaves timings_s out so every byte is reproducible
+};
+
+// The canonical bytes of each output file, by file name (manifest.json excluded).
+std::vector<std::pair<std::string, std::string>> epoch_files(const Epoch& e);
+std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::string, std::string>>& files,
+                           const EpochWriteOptions& o);
+
+Status write_epoch(const Epoch& e, const std::filesystem::path& dir, const EpochWriteOptions& o = {});
+Result<Epoch> read_epoch(const std::filesystem::path& dir);
+
+// R1-EPO-020: one row per particle.
+std::string export_tsv(const Epoch& e);
+
+}  // namespace r1

@@ -1,0 +1,92 @@
+// Atomic output directories (R1-ERR-003, R1-EPO-010).
+#include "r1/reference/atomic_dir.hpp"
+
+#include <fcntl.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+
+namespace r1 {
+
+namespace fs = std::filesystem;
+
+namespace {
+Status fsync_path(const fs::path& p, const std::string& what) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status::output(what + ": cannot open for flushing: " + std::strerror(errno));
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) return Status::output(what + ": flush failed: " + std::strerror(errno));
+  return Status::ok();
+}
+}  // namespace
+
+AtomicDirectory::AtomicDirectory(fs::path target, std::function<bool(const fs::path&)> replaceable)
+    : target_(std::move(target)), replaceable_(std::move(replaceable)) {}
+
+AtomicDirectory::~AtomicDirectory() {
+  if (!committed_ && !temp_.empty()) {
+    std::error_code ec;
+    fs::remove_all(temp_, ec);
+  }
+}
+
+Status AtomicDirectory::open() {
+  static std::atomic<unsigned> seq{0};
+  std::error_code ec;
+  const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  if (!fs::is_directory(parent, ec)) return Status::output(target_.string() + ": directory " + parent.string() + " does not exist");
+  if (fs::exists(target_, ec)) {
+    if (!fs::is_directory(target_, ec)) return Status::output(target_.string() + ": exists and is not a directory");
+    if (!replaceable_(target_))
+      return Status::output(target_.string() + ": exists and is not an r1 output directory; refusing to replace it");
+  }
+  temp_ = parent / ("." + target_.filename().string() + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(seq++));
+  if (!fs::create_directory(temp_, ec)) {
+    temp_.clear();
+    return Status::output(target_.string() + ": cannot create a temporary directory: " + ec.message());
+  }
+  return Status::ok();
+}
+
+Status AtomicDirectory::write(const std::string& name, std::string_view bytes) {
+  const fs::path p = temp_ / name;
+  const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) return Status::output((target_ / name).string() + ": cannot create: " + std::strerror(errno));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int e = errno;
+      ::close(fd);
+      return Status::output((target_ / name).string() + ": write failed: " + std::strerror(e));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) return Status::output((target_ / name).string() + ": flush failed");
+  return Status::ok();
+}
+
+Status AtomicDirectory::commit() {
+  R1_TRY(fsync_path(temp_, target_.string()));
+  std::error_code ec;
+  if (fs::exists(target_, ec)) {
+    // Swap in one step, so readers see the old epoch or the new one, never neither.
+    if (::renameat2(AT_FDCWD, temp_.c_str(), AT_FDCWD, target_.c_str(), RENAME_EXCHANGE) != 0)
+      return Status::output(target_.string() + ": cannot replace: " + std::strerror(errno));
+    committed_ = true;
+    fs::remove_all(temp_, ec);  // now the old directory
+  } else {
+    if (::rename(temp_.c_str(), target_.c_str()) != 0)
+      return Status::output(target_.string() + ": cannot create: " + std::strerror(errno));
+    committed_ = true;
+  }
+  const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  return fsync_path(parent, parent.string());
+}
+
+}  // namespace r1
