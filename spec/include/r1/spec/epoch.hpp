@@ -38,7 +38,7 @@ struct Focus {
   std::vector<Scalar> phi;        // per particle, canonical order. Q32: raws sum to exactly 2^32, all > 0
   std::uint32_t steps = 0;        // T(eps) actually run
   double kappa = 0;               // contraction estimate that fixed T(eps)
-  double lambda_max = 0;          // largest eigenvalue of L = D - A_sym (power iteration)
+  double lambda_max = 0;          // bound 2 max d on the largest eigenvalue of L = D - A_sym (Gershgorin, R1-FOC-060)
   double syntropy = 0;            // KL(phi || uniform), nats
   std::vector<std::uint32_t> cyberank;  // particle indices by phi descending, ties by lower index
 };

@@ -1,0 +1,233 @@
+// Focus driver: parameter checks, kappa and T(eps), the coupled tri-kernel iteration in Q32 and
+// fp64, cyberank and syntropy (R1-FOC-001..003, R1-FOC-012, R1-FOC-050, R1-FOC-060..072, R1-FOC-083).
+#include "r1/reference/focus.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <new>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "focus_operators.hpp"
+#include "heat_kernel.hpp"
+#include "r1/fixedpoint/elementary.hpp"
+#include "r1/fixedpoint/exact_sum.hpp"
+#include "r1/fixedpoint/pairwise.hpp"
+
+namespace r1 {
+
+namespace {
+
+constexpr std::int64_t kOneRaw = Q32::kOneRaw;
+// max_steps above this is a typo, not a plan: 10^5 steps of a 10^7-link graph take days.
+constexpr std::uint32_t kMaxStepsLimit = 100000;
+constexpr std::uint32_t kDegreeLimit = 32;              // R1-FOC-002: higher c_k round to 0
+constexpr std::int64_t kTauLimitRaw = std::int64_t{64} << 32;  // R1-FOC-002: cost ceil(tau/2) K products
+
+Status bad_param(const std::string& name, Q32 value, const std::string& range) {
+  return Status::input("focus: " + name + " = " + value.to_string() + " must lie in " + range);
+}
+
+bool in_unit(Q32 q) { return q.raw >= 0 && q.raw <= kOneRaw; }
+
+Status validate_lambda2(double lambda2) {
+  // The normalized Laplacian's spectrum lies in [0, 2]; NaN fails both comparisons.
+  if (!(lambda2 >= 0.0 && lambda2 <= 2.0))
+    return Status::input("focus: lambda2 = " + std::to_string(lambda2) + " must be a number in [0, 2]");
+  return Status::ok();
+}
+
+// ln n = fx::log(n / 2^k) + k ln 2 with the smallest k that brings n / 2^k below 2^31 (Q32 range);
+// n / 2^k is the exact raw n << (32 - k) (R1-FOC-071).
+Q32 log_count(std::uint32_t n) {
+  std::int64_t k = 0;
+  while ((static_cast<std::uint64_t>(n) >> k) >= (std::uint64_t{1} << 31)) ++k;
+  const Q32 scaled = Q32::from_raw(static_cast<std::int64_t>(static_cast<std::uint64_t>(n) << (32 - k)));
+  return fx::log(scaled) + Q32::from_raw(fx::kLn2.raw * k);
+}
+
+// Particle indices by phi descending, ties to the lower index: a strict total order (R1-FOC-070).
+template <class Key>
+std::vector<std::uint32_t> rank_by(const std::vector<Key>& key) {
+  std::vector<std::uint32_t> order(key.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&key](std::uint32_t a, std::uint32_t b) {
+    return key[a] != key[b] ? key[b] < key[a] : a < b;
+  });
+  return order;
+}
+
+// Runs a stage body and turns the exceptions a numeric path can raise into Status values
+// (R1-FOC-003, R1-ERR-004).
+template <class F>
+auto guarded(const F& body) -> decltype(body()) {
+  try {
+    return body();
+  } catch (const fx::OverflowError& e) {
+    return Status::internal(std::string("focus: Q32 overflow: ") + e.what());
+  } catch (const fx::DomainError& e) {
+    return Status::internal(std::string("focus: Q32 domain error: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    return Status::internal(std::string("focus: ") + e.what());
+  } catch (const std::bad_alloc&) {
+    return Status::internal("focus: out of memory");
+  }
+}
+
+template <class Scalar>
+Focus<Scalar> make_result(std::vector<Scalar> phi, const FocusPlan& plan) {
+  Focus<Scalar> f;
+  f.phi = std::move(phi);
+  f.steps = plan.steps;
+  f.kappa = plan.kappa.to_double();
+  f.lambda_max = plan.norm_l;
+  return f;
+}
+
+}  // namespace
+
+Status validate_tri_kernel_params(const TriKernelParams& p) {
+  if (!in_unit(p.lambda_d)) return bad_param("lambda_d", p.lambda_d, "[0, 1]");
+  if (!in_unit(p.lambda_s)) return bad_param("lambda_s", p.lambda_s, "[0, 1]");
+  if (!in_unit(p.lambda_h)) return bad_param("lambda_h", p.lambda_h, "[0, 1]");
+  // Exactly 1: the combination is convex with no tolerance to argue about (R1-FOC-002).
+  if (p.lambda_d.raw + p.lambda_s.raw + p.lambda_h.raw != kOneRaw)
+    return Status::input("focus: lambda_d + lambda_s + lambda_h = " +
+                         Q32::from_raw(p.lambda_d.raw + p.lambda_s.raw + p.lambda_h.raw).to_string() +
+                         " must be exactly 1");
+  if (!in_unit(p.teleport)) return bad_param("teleport", p.teleport, "[0, 1]");
+  if (p.mu.raw <= 0) return bad_param("mu", p.mu, "(0, 2^31)");
+  if (p.tau.raw <= 0 || p.tau.raw > kTauLimitRaw) return bad_param("tau", p.tau, "(0, 64]");
+  if (p.eps.raw <= 0 || p.eps.raw >= kOneRaw) return bad_param("eps", p.eps, "(0, 1)");
+  if (p.max_steps < 1 || p.max_steps > kMaxStepsLimit)
+    return Status::input("focus: max_steps = " + std::to_string(p.max_steps) + " must lie in [1, 100000]");
+  if (p.chebyshev_degree < 1 || p.chebyshev_degree > kDegreeLimit)
+    return Status::input("focus: chebyshev_degree = " + std::to_string(p.chebyshev_degree) + " must lie in [1, 32]");
+  return Status::ok();
+}
+
+std::uint32_t steps_for_kappa(Q32 kappa, Q32 eps, std::uint32_t max_steps) {
+  if (kappa.raw >= kOneRaw) return max_steps;  // no contraction to count on
+  if (kappa.raw <= 0) return 1;                // one step reaches the fixed point
+  const Q32 a = fx::log2(eps), b = fx::log2(kappa);
+  if (b.raw >= 0) return max_steps;  // kappa within an ulp of 1: log2 rounds to 0
+  if (a.raw >= 0) return 1;
+  // Exact ceiling of a.raw / b.raw, both negative (R1-FOC-061); |a.raw| <= 32 * 2^32.
+  const std::uint64_t num = static_cast<std::uint64_t>(-a.raw), den = static_cast<std::uint64_t>(-b.raw);
+  const std::uint64_t t = (num + den - 1) / den;
+  return static_cast<std::uint32_t>(std::clamp<std::uint64_t>(t, 1, max_steps));
+}
+
+Result<FocusPlan> plan_focus_steps(const Graph& g, const TriKernelParams& p, double lambda2) {
+  R1_TRY(validate_tri_kernel_params(p));
+  R1_TRY(validate_lambda2(lambda2));
+  if (g.n == 0 || g.degree.size() != g.n) return Status::input("focus: the graph has no particles or no degrees");
+  return guarded([&]() -> Result<FocusPlan> {
+    const std::uint64_t max_degree = *std::max_element(g.degree.begin(), g.degree.end());
+    // ||L|| = 2 max d: the Gershgorin bound on the combinatorial Laplacian (R1-FOC-060).
+    const i128 norm_l = 2 * static_cast<i128>(max_degree);
+    const Q32 term_d = p.lambda_d * (Q32::one() - p.teleport);
+    const Q32 term_s = Q32::from_raw(static_cast<std::int64_t>(
+        fx::detail::rne_div(static_cast<i128>(p.lambda_s.raw) * norm_l, norm_l + p.mu.raw)));
+    const Q32 term_h = p.lambda_h * fx::exp(-(p.tau * Q32::from_double(lambda2)));
+    FocusPlan plan;
+    plan.kappa = term_d + term_s + term_h;
+    plan.norm_l = static_cast<double>(static_cast<u128>(norm_l)) * 0x1p-32;  // one rounding, exact scaling
+    plan.steps = steps_for_kappa(plan.kappa, p.eps, p.max_steps);
+    return plan;
+  });
+}
+
+Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& p, double lambda2,
+                                     const ProgressFn& progress, const FocusOptions& options) {
+  return guarded([&]() -> Result<Focus<Q32>> {
+    R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
+    R1_ASSIGN(const auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
+    const std::uint32_t n = g.n;
+    const bool use_d = p.lambda_d.raw != 0, use_s = p.lambda_s.raw != 0, use_h = p.lambda_h.raw != 0;
+    const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
+    std::vector<Q32> phi = project_to_simplex_q32(ops.prior());  // R1-FOC-012
+    std::vector<Q32> d, s, h, v(n);
+    for (std::uint32_t step = 0; step < plan.steps; ++step) {
+      // A zero-weight operator contributes exactly 0 and is skipped (R1-FOC-050).
+      if (use_d) ops.diffusion(phi, d);
+      if (use_s) ops.springs(phi, s);
+      if (use_h) focus::heat_q32(ops, heat, phi, h);
+      focus::for_rows(options.parallel, n, [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t i = b; i < e; ++i) {
+          i128 acc = 0;  // three products below 2^96: exact
+          if (use_d) acc += static_cast<i128>(p.lambda_d.raw) * d[i].raw;
+          if (use_s) acc += static_cast<i128>(p.lambda_s.raw) * s[i].raw;
+          if (use_h) acc += static_cast<i128>(p.lambda_h.raw) * h[i].raw;
+          v[i] = Q32::from_raw(focus::round_q32(acc));
+        }
+      });
+      phi = project_to_simplex_q32(v);
+      report(progress, "focus", step + 1, plan.steps);
+    }
+    // Syntropy: RNE(sum phi_i ln phi_i + ln n), an exact sum (R1-FOC-071).
+    std::vector<Q32> logs(n);
+    focus::for_rows(options.parallel, n, [&](std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) logs[i] = fx::log(phi[i]);
+    });
+    fx::ExactSum j;
+    for (std::uint32_t i = 0; i < n; ++i) j.add_product(phi[i], logs[i]);
+    j.add(log_count(n));
+    Focus<Q32> f = make_result(std::move(phi), plan);
+    f.syntropy = j.round().to_double();
+    f.cyberank = rank_by(f.phi);
+    return f;
+  });
+}
+
+Result<Focus<double>> compute_focus_f64(const Graph& g, const TriKernelParams& p, double lambda2,
+                                        const ProgressFn& progress, const FocusOptions& options) {
+  return guarded([&]() -> Result<Focus<double>> {
+    R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
+    R1_ASSIGN(const auto ops, focus::OperatorsF64::build(g, p, options.parallel));
+    const std::uint32_t n = g.n;
+    const bool use_d = p.lambda_d.raw != 0, use_s = p.lambda_s.raw != 0, use_h = p.lambda_h.raw != 0;
+    const double ld = p.lambda_d.to_double(), ls = p.lambda_s.to_double(), lh = p.lambda_h.to_double();
+    const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
+    std::vector<double> phi = project_to_simplex_f64(ops.prior());
+    std::vector<double> d, s, h, v(n);
+    for (std::uint32_t step = 0; step < plan.steps; ++step) {
+      if (use_d) ops.diffusion(phi, d);
+      if (use_s) ops.springs(phi, s);
+      if (use_h) focus::heat_f64(ops, heat, phi, h);
+      focus::for_rows(options.parallel, n, [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t i = b; i < e; ++i) {
+          // (l_d D + l_s S) + l_h H, left to right over the evaluated terms (R1-FOC-082).
+          double acc = 0.0;
+          bool first = true;
+          const auto add = [&](double term) {
+            acc = first ? term : acc + term;
+            first = false;
+          };
+          if (use_d) add(ld * d[i]);
+          if (use_s) add(ls * s[i]);
+          if (use_h) add(lh * h[i]);
+          v[i] = acc;
+        }
+      });
+      phi = project_to_simplex_f64(v);
+      report(progress, "focus", step + 1, plan.steps);
+    }
+    // Syntropy: pairwise sum of phi_i ln phi_i with the Q32 logarithm, plus ln n (R1-FOC-083).
+    std::vector<double> terms(n);
+    focus::for_rows(options.parallel, n, [&](std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        const Q32 q = std::max(Q32::from_double(phi[i]), Q32::epsilon());  // log needs >= 1 raw
+        terms[i] = phi[i] * fx::log(q).to_double();
+      }
+    });
+    const double syntropy = fx::pairwise_sum(terms) + log_count(n).to_double();
+    Focus<double> f = make_result(std::move(phi), plan);
+    f.syntropy = syntropy;
+    f.cyberank = rank_by(f.phi);
+    return f;
+  });
+}
+
+}  // namespace r1

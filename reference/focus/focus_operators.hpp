@@ -1,0 +1,125 @@
+// The tri-kernel operators on the layout graph: prior, diffusion, springs and the walk matrix N of
+// the heat kernel, in Q32 and fp64 (R1-FOC-011, R1-FOC-020..041, R1-FOC-080..081, R1-FOC-090).
+#pragma once
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "r1/fixedpoint/int128.hpp"
+#include "r1/fixedpoint/q32.hpp"
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/graph.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1::focus {
+
+// Runs body(begin, end) over [0, n): serially, or on TBB threads in blocks. Callers write only
+// the rows of their block, each a pure function of read-only inputs, so both give the same bits.
+template <class Body>
+void for_rows(bool parallel, std::uint32_t n, const Body& body) {
+  // 2048 rows per task: large enough that task overhead is noise for sparse rows of ~10 entries,
+  // small enough that a hub row does not leave the other threads idle for long.
+  constexpr std::uint32_t kGrain = 2048;
+  if (!parallel || n <= kGrain) {
+    body(std::uint32_t{0}, n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kGrain),
+                    [&](const tbb::blocked_range<std::uint32_t>& r) { body(r.begin(), r.end()); });
+}
+
+// Round-to-nearest-even of v / 2^32 to a Q32 raw; OverflowError when it does not fit.
+inline std::int64_t round_q32(i128 v) {
+  const i128 r = fx::detail::rne_shift(v, Q32::kFracBits);
+  if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("focus: rounding");
+  return static_cast<std::int64_t>(r);
+}
+
+// The sparsity patterns both domains share: in-links of directed A0 (targets' rows, sources
+// ascending) and, for every particle, whether it is isolated (no A_sym neighbour).
+struct FocusPattern {
+  std::uint32_t n = 0;
+  std::vector<std::uint64_t> in_ptr;   // n + 1
+  std::vector<std::uint32_t> in_src;   // source of each in-link
+  std::vector<std::uint32_t> dangling; // sources without out-links, ascending
+};
+
+// Checks the graph's array sizes and index ranges and that A_sym's pattern is symmetric where the
+// operators rely on it. Input error naming the first inconsistency.
+Status check_graph(const Graph& g);
+
+// ---- Q32 (canonical) -------------------------------------------------------------------------------
+
+class OperatorsQ32 {
+ public:
+  // Precomputes the prior, the apportioned transition P (R1-FOC-020) and walk matrix N
+  // (R1-FOC-041) and the springs constants. The graph must pass check_graph and have a positive
+  // total degree; the parameters must be valid.
+  static Result<OperatorsQ32> build(const Graph& g, const TriKernelParams& params, bool parallel);
+
+  std::uint32_t n() const { return pattern_.n; }
+  const std::vector<Q32>& prior() const { return prior_; }
+
+  // D(phi) (R1-FOC-021), S(phi) (R1-FOC-030), N x (R1-FOC-041); `out` is resized to n.
+  void diffusion(std::span<const Q32> phi, std::vector<Q32>& out) const;
+  void springs(std::span<const Q32> phi, std::vector<Q32>& out) const;
+  void walk(std::span<const Q32> x, std::vector<Q32>& out) const;
+
+  // sum_j N(i, j) x_j exactly, on the 2^-64 scale (x_i * 2^32 for an isolated particle).
+  i128 walk_row(std::uint32_t i, const Q32* x) const {
+    const std::uint64_t b = row_ptr_[i], e = row_ptr_[i + 1];
+    if (b == e) return static_cast<i128>(x[i].raw) << Q32::kFracBits;
+    i128 acc = 0;
+    for (std::uint64_t k = b; k < e; ++k) acc += static_cast<i128>(walk_[k]) * x[col_[k]].raw;
+    return acc;
+  }
+  bool parallel() const { return parallel_; }
+
+ private:
+  FocusPattern pattern_;
+  bool parallel_ = false;
+  const std::uint64_t* row_ptr_ = nullptr;  // the graph's A_sym CSR, borrowed (outlives *this)
+  const std::uint32_t* col_ = nullptr;
+  const std::int64_t* w_ = nullptr;
+  const std::uint64_t* degree_ = nullptr;
+  std::vector<Q32> prior_;
+  std::vector<std::int64_t> in_p_;   // P(p, q) per in-link, raw
+  std::vector<std::int64_t> walk_;   // N(i, j) at A_sym entry (i, j), raw
+  std::int64_t one_minus_t_ = 0, teleport_ = 0, mu_ = 0, springs_a_ = 0;
+};
+
+// ---- fp64 -----------------------------------------------------------------------------------------
+
+class OperatorsF64 {
+ public:
+  static Result<OperatorsF64> build(const Graph& g, const TriKernelParams& params, bool parallel);
+
+  std::uint32_t n() const { return pattern_.n; }
+  const std::vector<double>& prior() const { return prior_; }
+
+  void diffusion(std::span<const double> phi, std::vector<double>& out) const;
+  void springs(std::span<const double> phi, std::vector<double>& out) const;
+  void walk(std::span<const double> x, std::vector<double>& out) const;
+  // (N x)_i: the pairwise sum of row i's products (x_i for an isolated particle); `buf` is
+  // scratch of at least the row's length.
+  double walk_row(std::uint32_t i, const double* x, std::vector<double>& buf) const;
+  bool parallel() const { return parallel_; }
+
+ private:
+  FocusPattern pattern_;
+  bool parallel_ = false;
+  const std::uint64_t* row_ptr_ = nullptr;
+  const std::uint32_t* col_ = nullptr;
+  const std::int64_t* w_ = nullptr;
+  std::vector<double> degree_;       // d_i as a double (one rounding of the exact raw sum), value scale
+  std::vector<double> prior_;
+  std::vector<double> in_p_;
+  std::vector<double> walk_;
+  double one_minus_t_ = 0, teleport_ = 0, mu_ = 0, springs_a_ = 0;
+};
+
+}  // namespace r1::focus

@@ -1,0 +1,111 @@
+// Largest-remainder apportionment and the projection to the simplex in Q32 and fp64
+// (R1-FOC-010, R1-FOC-051..053).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "apportion.hpp"
+#include "r1/fixedpoint/pairwise.hpp"
+#include "r1/reference/focus.hpp"
+
+namespace r1 {
+namespace focus {
+
+void apportion_into(std::uint64_t total, std::span<const std::uint64_t> w, std::span<std::int64_t> out,
+                    ApportionScratch& scratch) {
+  const std::size_t n = w.size();
+  if (n == 0 || out.size() != n) throw std::invalid_argument("apportion: no weights or size mismatch");
+  if (total >= (std::uint64_t{1} << 63)) throw std::invalid_argument("apportion: total must be below 2^63");
+  u128 sum = 0;
+  for (const std::uint64_t x : w) sum += x;
+  // All weights zero: every item counts as weight 1 (R1-FOC-010), so the total is spread evenly.
+  const bool equal = sum == 0;
+  if (equal) sum = n;
+  auto& rem = scratch.remainder;
+  rem.resize(n);
+  std::uint64_t given = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const u128 p = static_cast<u128>(total) * (equal ? 1 : w[i]);  // < 2^127: exact
+    const u128 q = p / sum;
+    rem[i] = p - q * sum;
+    out[i] = static_cast<std::int64_t>(q);  // q <= total < 2^63
+    given += static_cast<std::uint64_t>(q);
+  }
+  // 0 <= left < n: each floor loses less than one unit.
+  const std::uint64_t left = total - given;
+  if (left == 0) return;
+  // The `left` largest remainders get one more unit; only items with a remainder can be among
+  // them (sum of remainders = sum * left with each below sum, so more than `left` are non-zero).
+  auto& order = scratch.order;
+  order.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (rem[i] != 0) order.push_back(static_cast<std::uint32_t>(i));
+  // Larger remainder first, then the lower index: a strict total order, so the chosen set is
+  // unique whatever nth_element's internal steps are.
+  const auto before = [&rem](std::uint32_t a, std::uint32_t b) { return rem[a] != rem[b] ? rem[a] > rem[b] : a < b; };
+  const auto cut = order.begin() + static_cast<std::ptrdiff_t>(left);
+  std::nth_element(order.begin(), cut, order.end(), before);
+  for (auto it = order.begin(); it != cut; ++it) ++out[*it];
+}
+
+}  // namespace focus
+
+std::vector<std::int64_t> apportion(std::uint64_t total, std::span<const std::uint64_t> weights) {
+  std::vector<std::int64_t> out(weights.size());
+  focus::ApportionScratch scratch;
+  focus::apportion_into(total, weights, out, scratch);
+  return out;
+}
+
+namespace {
+void check_simplex_size(std::size_t n, const char* what) {
+  // One raw of 2^32 for each entry must fit: n = 2^32 would leave nothing to distribute and no
+  // room for positivity beyond it.
+  if (n == 0 || n >= (std::size_t{1} << 32)) throw std::invalid_argument(std::string(what) + ": need 1 <= n < 2^32 entries");
+}
+}  // namespace
+
+std::vector<Q32> project_to_simplex_q32(std::span<const Q32> v) {
+  check_simplex_size(v.size(), "project_to_simplex_q32");
+  const std::size_t n = v.size();
+  // Reserve the floor of one raw per entry first (R1-FOC-051), then share out the rest in
+  // proportion to each entry's excess over that floor.
+  const std::uint64_t rest = (std::uint64_t{1} << 32) - n;
+  std::vector<std::uint64_t> excess(n);
+  for (std::size_t i = 0; i < n; ++i) excess[i] = v[i].raw > 1 ? static_cast<std::uint64_t>(v[i].raw) - 1 : 0;
+  std::vector<std::int64_t> share(n);
+  focus::ApportionScratch scratch;
+  focus::apportion_into(rest, excess, share, scratch);
+  std::vector<Q32> out(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = Q32::from_raw(share[i] + 1);
+  return out;
+}
+
+std::vector<double> project_to_simplex_f64(std::span<const double> v) {
+  check_simplex_size(v.size(), "project_to_simplex_f64");
+  // The same floor as the Q32 domain: one raw, 2^-32 (R1-FOC-053).
+  constexpr double kFloor = 0x1p-32;
+  std::vector<double> x(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) throw std::invalid_argument("project_to_simplex_f64: non-finite value at " + std::to_string(i));
+    x[i] = v[i] > kFloor ? v[i] : kFloor;
+  }
+  const double s = fx::pairwise_sum(x);
+  for (double& e : x) e /= s;
+  return x;
+}
+
+Result<std::vector<Q32>> simplex_from_f64(std::span<const double> phi) {
+  if (phi.empty()) return Status::input("simplex_from_f64: empty phi");
+  if (phi.size() >= (std::size_t{1} << 32)) return Status::input("simplex_from_f64: 2^32 or more entries");
+  std::vector<Q32> q(phi.size());
+  for (std::size_t i = 0; i < phi.size(); ++i) {
+    const auto r = Q32::checked_from_double(phi[i]);
+    if (!r) return Status::input("simplex_from_f64: phi[" + std::to_string(i) + "] is not a finite Q32 value");
+    q[i] = *r;
+  }
+  return project_to_simplex_q32(q);
+}
+
+}  // namespace r1

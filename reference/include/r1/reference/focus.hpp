@@ -1,0 +1,79 @@
+// Focus phi*: the tri-kernel fixed point in Q32 and fp64, the simplex projection, T(eps) and the
+// heat-kernel coefficients (R1-FOC-001..091, spec/focus.md).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/graph.hpp"
+#include "r1/spec/progress.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1 {
+
+struct FocusOptions {
+  // Runs the row loops of every sparse product on TBB threads. Each row is the same pure
+  // function of the previous vector, so the result is bit-identical to the serial one
+  // (R1-FOC-090); off by default because the reference is single-threaded.
+  bool parallel = false;
+};
+
+// The tri-kernel iteration phi <- Proj(l_d D(phi) + l_s S(phi) + l_h H(phi)) from Proj(u), run for
+// exactly T(eps) steps. `lambda2` is the second smallest eigenvalue of the normalized Laplacian
+// (0 for a disconnected graph), in [0, 2]. Bad parameters or graph: input error; a broken
+// invariant: internal error. The Q32 phi raws sum to exactly 2^32 and are all >= 1.
+Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
+                                     const ProgressFn& progress = {}, const FocusOptions& options = {});
+// The same algorithm in IEEE doubles with pairwise reductions (R1-FOC-080..083).
+Result<Focus<double>> compute_focus_f64(const Graph& g, const TriKernelParams& params, double lambda2,
+                                        const ProgressFn& progress = {}, const FocusOptions& options = {});
+
+// Checks the ranges of R1-FOC-002 and that the three weights sum to exactly 1.
+Status validate_tri_kernel_params(const TriKernelParams& params);
+
+// ---- simplex (R1-FOC-010, R1-FOC-051..053) ------------------------------------------------------
+
+// Largest-remainder apportionment of `total` (< 2^63) over `weights` (R1-FOC-010): shares sum to
+// exactly `total`, each is the floor or ceiling of total * w_i / sum w, ties of the remainder go
+// to the lower index; all-zero weights count as equal. std::invalid_argument for no weights.
+std::vector<std::int64_t> apportion(std::uint64_t total, std::span<const std::uint64_t> weights);
+
+// Proj(v): raws sum to exactly 2^32, each >= 1; the identity on vectors already on the Q32
+// simplex with positive raws. std::invalid_argument unless 1 <= v.size() < 2^32.
+std::vector<Q32> project_to_simplex_q32(std::span<const Q32> v);
+// The fp64 projection: max(v_i, 2^-32) divided by their pairwise sum. Same size limits.
+std::vector<double> project_to_simplex_f64(std::span<const double> v);
+// An fp64 phi converted to Q32 by the canonical rule: Proj(from_double(phi_i)). Input error for a
+// non-finite or out-of-range value or an empty vector.
+Result<std::vector<Q32>> simplex_from_f64(std::span<const double> phi);
+
+// ---- steps (R1-FOC-060..061) --------------------------------------------------------------------
+
+struct FocusPlan {
+  Q32 kappa;                   // contraction estimate
+  double norm_l = 0;           // ||L|| = 2 max degree (Gershgorin), as a double
+  std::uint32_t steps = 0;     // T(eps), capped
+};
+
+// kappa and T(eps) for this graph, parameters and lambda2 (validated as compute_focus_* does).
+Result<FocusPlan> plan_focus_steps(const Graph& g, const TriKernelParams& params, double lambda2);
+// ceil(log2(eps) / log2(kappa)) from the Q32 logarithms' raws, clamped to [1, max_steps];
+// kappa >= 1: max_steps; kappa <= 0: 1. Requires eps in (0, 1) and max_steps >= 1.
+std::uint32_t steps_for_kappa(Q32 kappa, Q32 eps, std::uint32_t max_steps);
+
+// ---- heat kernel (R1-FOC-042..044) ---------------------------------------------------------------
+
+struct HeatCoefficients {
+  std::uint32_t substeps = 0;       // m = ceil(tau / 2)
+  std::vector<Q32> q32;             // c_0..c_K, each correctly rounded to Q32
+  std::vector<double> f64;          // the same, nearest double (correctly rounded for c_k >= 2^-180,
+                                    // within 2^-240 below that, R1-FOC-044)
+};
+
+// c_k = (2 - [k = 0]) e^-sigma I_k(sigma), sigma = tau / m, for k = 0..degree, from 256-bit fixed
+// point. Requires 0 < tau <= 64 and degree <= 32 (std::invalid_argument otherwise).
+HeatCoefficients heat_coefficients(Q32 tau, std::uint32_t degree);
+
+}  // namespace r1
