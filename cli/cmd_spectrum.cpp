@@ -1,0 +1,162 @@
+// r1 spectrum FILE: the spectral embedding alone, for inspection, timing and the eigsh peer
+// comparison (R1-SPEC-060..064, R1-SPEC-070..071).
+#include <sys/resource.h>
+
+#include <bit>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "commands.hpp"
+#include "input_options.hpp"
+#include "progress.hpp"
+#include "r1/reference/atomic_file.hpp"
+#include "r1/reference/graph_build.hpp"
+#include "r1/reference/snapshot_io.hpp"
+#include "r1/reference/spectral.hpp"
+
+namespace r1::cli {
+
+namespace {
+
+struct SpectrumOptions {
+  std::string file;
+  InputOptions input;
+  std::string domain = "q32";
+  std::optional<double> rho;
+  double tolerance = SpectralParams{}.tolerance;
+  std::uint32_t basis = SpectralParams{}.basis;
+  std::uint32_t max_restarts = 0;
+  bool parallel = false;
+  bool json = false;
+  std::string vectors, laplacian;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+double peak_rss_mib() {
+  rusage u{};
+  ::getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+double as_double(fx::Q32 v) { return v.to_double(); }
+double as_double(double v) { return v; }
+
+// u_2..u_6 as little-endian doubles, n rows of 5, row-major (Q32 entries convert exactly).
+template <class Scalar>
+Status write_vectors(const Spectrum<Scalar>& s, const std::string& path) {
+  static_assert(std::endian::native == std::endian::little, "the --vectors format is little-endian");
+  AtomicFile f(path);
+  R1_TRY(f.open());
+  std::string buf;
+  buf.reserve(1u << 20);
+  for (std::uint32_t i = 0; i < s.n; ++i) {
+    for (std::size_t c = 0; c < 5; ++c) {
+      const double v = as_double(s.u[c][i]);
+      buf.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    if (buf.size() >= (1u << 20)) {
+      R1_TRY(f.write(buf));
+      buf.clear();
+    }
+  }
+  R1_TRY(f.write(buf));
+  return f.commit();
+}
+
+template <class Scalar>
+Status report_spectrum(const SpectrumOptions& o, const Graph& g, const Spectrum<Scalar>& s, double load_s,
+                       double solve_s) {
+  if (!o.vectors.empty()) R1_TRY(write_vectors(s, o.vectors));
+  if (o.json) {
+    nlohmann::json j = {{"file", o.file},
+                        {"domain", o.domain},
+                        {"n", s.n},
+                        {"nnz", g.nnz()},
+                        {"rho", s.rho},
+                        {"eigenvalues", s.eigenvalues},
+                        {"residuals", s.residuals},
+                        {"found", s.found},
+                        {"restarts", s.restarts},
+                        {"matvecs", s.matvecs},
+                        {"tolerance", o.tolerance},
+                        {"load_s", load_s},
+                        {"solve_s", solve_s},
+                        {"peak_rss_mib", peak_rss_mib()}};
+    std::cout << j.dump(2) << "\n";
+    return Status::ok();
+  }
+  std::printf("particles    %u (%llu stored entries), domain %s, rho %.17g\n", s.n,
+              static_cast<unsigned long long>(g.nnz()), o.domain.c_str(), s.rho);
+  for (std::size_t k = 0; k < 6; ++k)
+    std::printf("lambda_%zu     %.17g  residual %.3g%s\n", k + 1, s.eigenvalues[k], s.residuals[k],
+                k > s.found ? "  (missing: n < 7)" : "");
+  std::printf("work         %u restarts, %u operator applications\n", s.restarts, s.matvecs);
+  std::printf("time         load %.3f s, solve %.3f s; peak memory %.0f MiB\n", load_s, solve_s, peak_rss_mib());
+  return Status::ok();
+}
+
+Status run_spectrum(const SpectrumOptions& o) {
+  if (o.domain != "q32" && o.domain != "fp64")
+    return Status::input("--domain '" + o.domain + "' is not one of q32, fp64");
+  ProgressLine progress;
+  R1_ASSIGN(const ReadOptions ro, o.input.read_options(progress.sink()));
+  const auto t0 = std::chrono::steady_clock::now();
+  R1_ASSIGN(Snapshot snap, read_snapshot(o.file, ro));
+  R1_ASSIGN(Graph g, build_graph(snap, progress.sink()));
+  const double load_s = seconds_since(t0);
+  SpectralParams p;
+  p.rho = o.rho;
+  p.tolerance = o.tolerance;
+  p.basis = o.basis;
+  p.max_restarts = o.max_restarts;
+  SpectralOptions so;
+  so.parallel = o.parallel;
+  if (!o.laplacian.empty()) {
+    if (o.domain == "q32") {
+      R1_ASSIGN(const auto op, spectral_operator_q32(g, p));
+      R1_TRY(write_operator_matrix_market(op, o.laplacian));
+    } else {
+      R1_ASSIGN(const auto op, spectral_operator_f64(g, p));
+      R1_TRY(write_operator_matrix_market(op, o.laplacian));
+    }
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  if (o.domain == "q32") {
+    R1_ASSIGN(const auto s, spectral_embedding_q32(g, p, progress.sink(), so));
+    const double solve_s = seconds_since(t1);
+    progress.finish();
+    return report_spectrum(o, g, s, load_s, solve_s);
+  }
+  R1_ASSIGN(const auto s, spectral_embedding_f64(g, p, progress.sink(), so));
+  const double solve_s = seconds_since(t1);
+  progress.finish();
+  return report_spectrum(o, g, s, load_s, solve_s);
+}
+
+}  // namespace
+
+void add_spectrum(CLI::App& app, Runner& selected) {
+  auto o = std::make_shared<SpectrumOptions>();
+  auto* cmd = app.add_subcommand("spectrum", "the spectral embedding alone: lambda_1..6, residuals, u_2..u_6");
+  cmd->add_option("FILE", o->file, "snapshot: .graph, TSV/CSV edge list or Matrix Market (- for stdin)")->required();
+  o->input.add_to(*cmd);
+  cmd->add_option("--domain", o->domain, "q32 (canonical, default) or fp64");
+  cmd->add_option("--rho", o->rho, "regularisation rho >= 0 (default: 0 if connected, else the mean weighted degree)");
+  cmd->add_option("--tolerance", o->tolerance, "residual target ||L u - lambda u|| (default 1e-9)");
+  cmd->add_option("--basis", o->basis, "Lanczos vectors per restart cycle, 12..1024 (default 32)");
+  cmd->add_option("--max-restarts", o->max_restarts, "restart cap (default 0: the solver's own, 1000)");
+  cmd->add_flag("--parallel", o->parallel, "TBB kernels (bit-identical to the serial default)");
+  cmd->add_flag("--json", o->json, "print one JSON object");
+  cmd->add_option("--vectors", o->vectors, "write u_2..u_6 as little-endian f64, n rows of 5");
+  cmd->add_option("--laplacian", o->laplacian,
+                  "write the operator iterated on as Matrix Market real symmetric (rank-one part on %r1-rank-one lines)");
+  cmd->callback([o, &selected] { selected = [o] { return run_spectrum(*o); }; });
+}
+
+}  // namespace r1::cli

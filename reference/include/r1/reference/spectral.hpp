@@ -1,0 +1,65 @@
+// The canonical spectral embedding (R-1.0 section 3, decisions 4-6; spec/spectral.md
+// R1-SPEC-001..072): lambda_1..6 and u_2..u_6 of the regularised normalised Laplacian by
+// thick-restart Lanczos, in Q32 (canonical) and fp64.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/graph.hpp"
+#include "r1/spec/progress.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1 {
+
+// How the solver runs, never what it computes: every setting gives the same bytes.
+struct SpectralOptions {
+  // TBB tasks for the operator and vector kernels (R1-SPEC-071). Bit-identical to serial.
+  bool parallel = false;
+};
+
+// The operator the solver iterates on (R1-SPEC-001..006), for export and tests:
+//     L~ x = x - M x - g (g^T x),   M_ij = w_ij / sqrt(D_i D_j),  D = degree + rho,
+//     g_i = sqrt(rho / (n D_i))  (g empty when rho = 0).
+// `trivial` is the deflated vector D^(1/2) 1 scaled to squared length 2^e (R1-SPEC-011).
+template <class Scalar>
+struct SpectralOperator {
+  const Graph* graph = nullptr;  // the CSR pattern (row_ptr, col); must outlive the operator
+  std::uint32_t n = 0;
+  int e = 0;                     // scaled inner product <x, y> = 2^-e sum x_i y_i, 2^e >= n
+  fx::Q32 rho;                   // regularisation actually used
+  std::vector<Scalar> m;         // per stored entry of the graph, M_ij
+  std::vector<Scalar> g;         // rank-one factor; empty when rho = 0
+  std::vector<Scalar> trivial;   // D^(1/2) 1, squared length 2^e
+
+  // y = L~ x (R1-SPEC-005): Q32, every row one exact sum rounded once; fp64, fixed pairwise rows.
+  void apply(const Scalar* x, Scalar* y, bool parallel = false) const;
+};
+
+// rho by decision 4 (R1-SPEC-002): the forced value, else 0 for a connected graph and the mean
+// weighted degree otherwise, as Q32. Input errors: a negative, non-finite or out-of-range
+// forced value; rho = 0 with an isolated particle.
+Result<fx::Q32> spectral_rho(const Graph& g, const SpectralParams& params);
+
+Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const SpectralParams& params);
+Result<SpectralOperator<double>> spectral_operator_f64(const Graph& g, const SpectralParams& params);
+
+// The embedding: eigenvalues, residuals and unit vectors u_2..u_6 (R1-SPEC-060..064).
+// Input errors: an empty graph, bad params (basis < 12, tolerance not positive), rho = 0 with an
+// isolated particle. Q32 overflow inside the solver is an internal error naming the stage.
+Result<Spectrum<fx::Q32>> spectral_embedding_q32(const Graph& g, const SpectralParams& params,
+                                                 const ProgressFn& progress = {}, const SpectralOptions& options = {});
+Result<Spectrum<double>> spectral_embedding_f64(const Graph& g, const SpectralParams& params,
+                                                const ProgressFn& progress = {}, const SpectralOptions& options = {});
+
+// Writes the sparse part I - M of the operator as Matrix Market "coordinate real symmetric"
+// (lower triangle, 1-based, values with 17 significant digits, which reproduce every double and
+// so every Q32 entry exactly), atomically (R1-ERR-003). When rho > 0, comment lines
+// "%r1-rank-one i g_i" (1-based) carry g, and the operator is that matrix minus g g^T
+// (R1-SPEC-070).
+template <class Scalar>
+Status write_operator_matrix_market(const SpectralOperator<Scalar>& op, const std::string& path);
+
+}  // namespace r1

@@ -1,0 +1,277 @@
+// The regularised normalised Laplacian the solver iterates on: rho rule, exact Q32 and fp64
+// entries, the deflated vector, the operator application and its Matrix Market export
+// (R1-SPEC-001..006, R1-SPEC-010, R1-SPEC-070).
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <limits>
+
+#include "exact_round.hpp"
+#include "r1/fixedpoint/pairwise.hpp"
+#include "r1/reference/atomic_file.hpp"
+#include "r1/reference/spectral.hpp"
+#include "vector_kernels.hpp"
+
+namespace r1 {
+
+using spectral::FastExact;
+using spectral::U256;
+
+Result<fx::Q32> spectral_rho(const Graph& g, const SpectralParams& params) {
+  fx::Q32 rho;
+  if (params.rho) {
+    const double r = *params.rho;
+    if (!std::isfinite(r) || r < 0)
+      return Status::input("spectral: rho must be a finite number >= 0 (got " + std::to_string(r) + ")");
+    const auto q = fx::Q32::checked_from_double(r);
+    if (!q) return Status::input("spectral: rho " + std::to_string(r) + " is outside the Q32 range");
+    rho = *q;
+  } else if (g.component_size.size() > 1) {
+    // Mean weighted degree, the exact sum of Q32 degrees divided by n and rounded once (RNE).
+    u128 sum = 0;
+    for (const std::uint64_t d : g.degree) sum += d;
+    rho = fx::Q32::from_raw(static_cast<std::int64_t>(fx::detail::rne_div(static_cast<i128>(sum), g.n)));
+  }
+  if (rho.raw == 0) {
+    for (std::uint32_t i = 0; i < g.n; ++i)
+      if (g.degree[i] == 0)
+        return Status::input("spectral: particle " + std::to_string(i) +
+                             " has no links, so D^(-1/2) is undefined with rho = 0; give --rho > 0 or leave rho automatic");
+  }
+  return rho;
+}
+
+namespace {
+
+// 2^e >= n with e minimal (R1-SPEC-011): the scale of the inner product.
+int scale_exponent(std::uint32_t n) { return n <= 1 ? 0 : static_cast<int>(std::bit_width(n - 1)); }
+
+// D_i = degree_i + rho as an exact integer of Q32 units (< 2^62 + 2^63 by check_graph and the
+// Q32 range of rho).
+u128 regularised_degree(const Graph& g, std::uint32_t i, fx::Q32 rho) {
+  return static_cast<u128>(g.degree[i]) + static_cast<u128>(rho.raw);
+}
+
+Status check_graph(const Graph& g) {
+  if (g.n == 0) return Status::input("spectral: the graph has no particles");
+  if (g.row_ptr.size() != g.n + std::size_t{1} || g.degree.size() != g.n || g.w.size() != g.col.size())
+    return Status::internal("spectral: malformed layout graph");
+  // D_i < 2^63 keeps D_i D_j below 2^126 in the exact entry rounding (R1-SPEC-003); a weighted
+  // degree of 2^31 is far beyond any graph that fits in memory.
+  for (const std::uint64_t d : g.degree)
+    if (d >= (std::uint64_t{1} << 62)) return Status::input("spectral: a weighted degree reaches 2^30");
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const SpectralParams& params) {
+  R1_TRY(check_graph(g));
+  R1_ASSIGN(const fx::Q32 rho, spectral_rho(g, params));
+  SpectralOperator<fx::Q32> op;
+  op.graph = &g;
+  op.n = g.n;
+  op.e = scale_exponent(g.n);
+  op.rho = rho;
+  const std::size_t n = g.n;
+  std::vector<u128> d(n);
+  u128 sum_d = 0;
+  for (std::uint32_t i = 0; i < g.n; ++i) {
+    d[i] = regularised_degree(g, i, rho);
+    sum_d += d[i];
+  }
+  // M_ij = RNE(2^32 w / sqrt(D_i D_j)) = RNE(sqrt(2^64 w^2 / (D_i D_j))) (R1-SPEC-003): w <= 2^32,
+  // so 2^64 w^2 <= 2^128; D_i D_j < 2^128 because each D < 2^64 for any graph r1 can hold.
+  op.m.resize(g.col.size());
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
+      const u128 w2 = static_cast<u128>(g.w[k]) * static_cast<u128>(g.w[k]);
+      const U256 num{w2 << 64, w2 >> 64};
+      op.m[k] = fx::Q32::from_raw(static_cast<std::int64_t>(spectral::rne_sqrt_ratio(num, d[i] * d[g.col[k]])));
+    }
+  if (rho.raw > 0) {
+    // g_i = RNE(2^32 sqrt(rho / (n D_i))) = RNE(sqrt(2^64 rho_raw / (n D_i))) (R1-SPEC-004).
+    op.g.resize(n);
+    for (std::uint32_t i = 0; i < g.n; ++i) {
+      const U256 num{static_cast<u128>(rho.raw) << 64, 0};
+      op.g[i] = fx::Q32::from_raw(static_cast<std::int64_t>(spectral::rne_sqrt_ratio(num, static_cast<u128>(g.n) * d[i])));
+    }
+  }
+  // trivial_i = RNE(2^32 sqrt(2^e D_i / sum D)) (R1-SPEC-006): squared length 2^e up to rounding.
+  op.trivial.resize(n);
+  for (std::uint32_t i = 0; i < g.n; ++i) {
+    const U256 num = spectral::shl(U256{d[i], 0}, 64 + op.e);  // < 2^(64 + 64 + 32)
+    op.trivial[i] = fx::Q32::from_raw(static_cast<std::int64_t>(spectral::rne_sqrt_ratio(num, sum_d)));
+  }
+  return op;
+}
+
+Result<SpectralOperator<double>> spectral_operator_f64(const Graph& g, const SpectralParams& params) {
+  R1_TRY(check_graph(g));
+  R1_ASSIGN(const fx::Q32 rho, spectral_rho(g, params));
+  SpectralOperator<double> op;
+  op.graph = &g;
+  op.n = g.n;
+  op.e = scale_exponent(g.n);
+  op.rho = rho;
+  const std::size_t n = g.n;
+  // D_i as the correctly rounded double of the exact integer times 2^-32; sum D likewise.
+  auto exact_to_double = [](u128 v) {
+    fx::ExactSum s;
+    s.add_term(static_cast<i128>(v >> 1));  // two halves keep each term below 2^127
+    s.add_term(static_cast<i128>(v - (v >> 1)));
+    return spectral::to_double_scaled(s, 32);
+  };
+  std::vector<double> d(n);
+  u128 sum_d = 0;
+  for (std::uint32_t i = 0; i < g.n; ++i) {
+    const u128 di = regularised_degree(g, i, rho);
+    d[i] = exact_to_double(di);
+    sum_d += di;
+  }
+  const double sum_dd = exact_to_double(sum_d);
+  op.m.resize(g.col.size());
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+      op.m[k] = (static_cast<double>(g.w[k]) * 0x1p-32) / std::sqrt(d[i] * d[g.col[k]]);
+  if (rho.raw > 0) {
+    op.g.resize(n);
+    const double r = rho.to_double(), nd = static_cast<double>(g.n);
+    for (std::uint32_t i = 0; i < g.n; ++i) op.g[i] = std::sqrt(r / (nd * d[i]));
+  }
+  op.trivial.resize(n);
+  const double scale = std::ldexp(1.0, op.e);
+  for (std::uint32_t i = 0; i < g.n; ++i) op.trivial[i] = std::sqrt(scale * d[i] / sum_dd);
+  return op;
+}
+
+// ---- application (R1-SPEC-005) --------------------------------------------------------------------
+
+template <>
+void SpectralOperator<fx::Q32>::apply(const fx::Q32* x, fx::Q32* y, bool parallel) const {
+  const Graph& gr = *graph;
+  // c = RNE(sum_j g_j x_j): the rank-one coefficient, rounded once to Q32.
+  std::int64_t c = 0;
+  if (!g.empty()) {
+    tbb::enumerable_thread_specific<FastExact> parts;
+    auto body = [&](std::size_t lo, std::size_t hi) {
+      FastExact& acc = parts.local();
+      for (std::size_t j = lo; j < hi; ++j) acc.add(static_cast<i128>(g[j].raw) * x[j].raw);
+    };
+    if (parallel && n >= spectral::kParallelMin) {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, spectral::kBlock),
+                        [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+    } else {
+      body(0, n);
+    }
+    FastExact total;
+    for (const FastExact& p : parts) total.merge(p);
+    c = total.round_shift(32);
+  }
+  const i128 one = i128{1} << 32;
+  auto rows = [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i) {
+      FastExact acc;
+      acc.add(static_cast<i128>(x[i].raw) * one);
+      for (std::uint64_t k = gr.row_ptr[i]; k < gr.row_ptr[i + 1]; ++k)
+        acc.add(-(static_cast<i128>(m[k].raw) * x[gr.col[k]].raw));
+      if (!g.empty()) acc.add(-(static_cast<i128>(g[i].raw) * c));
+      y[i] = fx::Q32::from_raw(acc.round_shift(32));
+    }
+  };
+  if (parallel && n >= spectral::kParallelMin) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, spectral::kBlock),
+                      [&](const tbb::blocked_range<std::size_t>& r) { rows(r.begin(), r.end()); });
+  } else {
+    rows(0, n);
+  }
+}
+
+template <>
+void SpectralOperator<double>::apply(const double* x, double* y, bool parallel) const {
+  const Graph& gr = *graph;
+  double c = 0;
+  if (!g.empty()) {
+    const std::span<const double> gs(g), xs(x, n);
+    c = parallel ? fx::parallel_pairwise_dot(gs, xs) : fx::pairwise_dot(gs, xs);
+  }
+  // Row i: S = the pairwise sum (R1-NUM-051) of m_ik x_k in column order; y_i = (x_i - S) - g_i c.
+  auto rows = [&](std::size_t lo, std::size_t hi) {
+    std::vector<double> p;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const std::uint64_t b = gr.row_ptr[i], e_ = gr.row_ptr[i + 1];
+      p.resize(e_ - b);
+      for (std::uint64_t k = b; k < e_; ++k) p[k - b] = m[k] * x[gr.col[k]];
+      double r = x[i] - fx::pairwise_sum(p);
+      if (!g.empty()) r = r - g[i] * c;
+      y[i] = r;
+    }
+  };
+  if (parallel && n >= spectral::kParallelMin) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, spectral::kBlock),
+                      [&](const tbb::blocked_range<std::size_t>& r) { rows(r.begin(), r.end()); });
+  } else {
+    rows(0, n);
+  }
+}
+
+// ---- Matrix Market export (R1-SPEC-070) -------------------------------------------------------------
+
+namespace {
+double as_double(fx::Q32 v) { return v.to_double(); }
+double as_double(double v) { return v; }
+
+void append_double(std::string& out, double v) {
+  char buf[40];
+  // Shortest text that reads back as the same double: exact for every Q32 entry (raw <= 2^32).
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+}  // namespace
+
+template <class Scalar>
+Status write_operator_matrix_market(const SpectralOperator<Scalar>& op, const std::string& path) {
+  const Graph& gr = *op.graph;
+  AtomicFile f(path);
+  R1_TRY(f.open());
+  std::string buf;
+  buf += "%%MatrixMarket matrix coordinate real symmetric\n";
+  buf += "% r1 spectral operator (R1-SPEC-070): L = I - M";
+  buf += op.g.empty() ? "" : " - g g^T with g on the %r1-rank-one lines";
+  buf += ", rho = " + op.rho.to_string() + ", domain ";
+  buf += std::is_same_v<Scalar, double> ? "fp64\n" : "q32\n";
+  for (std::size_t i = 0; i < op.g.size(); ++i) {
+    buf += "%r1-rank-one " + std::to_string(i + 1) + " ";
+    append_double(buf, as_double(op.g[i]));
+    buf += "\n";
+    if (buf.size() > (1u << 20)) {
+      R1_TRY(f.write(buf));
+      buf.clear();
+    }
+  }
+  const std::uint64_t lower = gr.nnz() / 2 + op.n;
+  buf += std::to_string(op.n) + " " + std::to_string(op.n) + " " + std::to_string(lower) + "\n";
+  for (std::uint32_t i = 0; i < op.n; ++i) {
+    for (std::uint64_t k = gr.row_ptr[i]; k < gr.row_ptr[i + 1] && gr.col[k] < i; ++k) {
+      buf += std::to_string(i + 1) + " " + std::to_string(gr.col[k] + 1) + " ";
+      append_double(buf, -as_double(op.m[k]));
+      buf += "\n";
+    }
+    buf += std::to_string(i + 1) + " " + std::to_string(i + 1) + " 1\n";
+    if (buf.size() > (1u << 20)) {
+      R1_TRY(f.write(buf));
+      buf.clear();
+    }
+  }
+  R1_TRY(f.write(buf));
+  return f.commit();
+}
+
+template Status write_operator_matrix_market(const SpectralOperator<fx::Q32>&, const std::string&);
+template Status write_operator_matrix_market(const SpectralOperator<double>&, const std::string&);
+
+}  // namespace r1
