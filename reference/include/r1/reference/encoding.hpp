@@ -1,0 +1,151 @@
+// The visual encoding (R-1.0 5, R1-ENC-001..050): radius, luminosity, hue, saturation, colour,
+// roles from degree and betweenness, shapes, and the metadata overlays.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/graph.hpp"
+#include "r1/spec/progress.hpp"
+#include "r1/spec/snapshot.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1 {
+
+using Rgb8 = std::array<std::uint8_t, 3>;
+
+// ---- colour (R1-ENC-005..006) ----------------------------------------------------------------
+
+// Lightness of the schemaless base colour, per mille (R1-ENC-005).
+inline constexpr std::uint32_t kBaseLightnessPermille = 550;
+
+// HSL to 8-bit display sRGB with one rounding per channel (R1-ENC-006). `hue_sixths` is 6 x hue
+// in turns, in [0, 6); `saturation` in [0, 1]; lightness in per mille, 0..1000.
+Rgb8 hsl_to_srgb8(Q32 hue_sixths, Q32 saturation, std::uint32_t lightness_permille);
+
+// ---- schemaless fields (R1-ENC-001..004) --------------------------------------------------------
+
+// r0 sqrt(phi) x multiplier, r0 = R_scene (R1-ENC-001).
+Q32 radius_of(Q32 phi, Q32 multiplier = Q32::one());
+// L0 phi apportioned so the raws sum to exactly L0's raw (R1-ENC-002); `phi` must sum to 2^32.
+std::vector<Q32> apportion_luminosity(std::span<const Q32> phi, Q32 total = Q32::one());
+// The angle of (u5, u6) in turns, [0, 1) (R1-ENC-003).
+Q32 hue_of(Q32 u5, Q32 u6);
+// Per-particle saturation from the graph's a2 and w (R1-ENC-004).
+std::vector<Q32> saturation_from_a2(const Graph& g);
+
+// ---- betweenness and roles (R1-ENC-010..019) -------------------------------------------------
+
+struct BetweennessOptions {
+  // Exact when n (n + nnz) <= budget; otherwise k = max(min_pivots, budget / (n + nnz)) pivots
+  // (R1-ENC-014).
+  std::uint64_t budget = std::uint64_t{1} << 30;
+  std::uint32_t min_pivots = 32;
+  // When set, exactly this many pivots (0 = every particle as a source, the exact computation).
+  std::optional<std::uint32_t> pivots;
+};
+
+struct Betweenness {
+  std::vector<double> value;  // b(p) of R1-ENC-012, exact or estimated
+  bool exact = true;
+  std::uint32_t sources = 0;  // BFS sources used: n when exact, k pivots otherwise
+};
+
+// The k particles with the smallest Hemera(id || "r1-pivot"), ascending particle index (R1-ENC-015).
+std::vector<std::uint32_t> choose_pivots(std::span<const ParticleId> ids, std::uint32_t k);
+// Sum over `sources` (ascending index) of the Brandes dependencies, times `scale` (R1-ENC-013).
+// scale = 0.5 with every particle a source gives b exactly.
+std::vector<double> betweenness_from_sources(const Graph& g, std::span<const std::uint32_t> sources, double scale,
+                                             const ProgressFn& progress = {});
+// Exact or pivot-estimated betweenness by the rule of R1-ENC-014.
+Betweenness betweenness(const Graph& g, std::span<const ParticleId> ids, const BetweennessOptions& options = {},
+                        const ProgressFn& progress = {});
+// The R1-ENC-016 bound on |b_est - b| holding with probability 1 - delta per particle.
+double betweenness_error_bound(std::uint32_t n, std::uint32_t k, double delta);
+
+struct RoleStats {
+  double degree_mean = 0, degree_sigma = 0;   // for the manifest; the hub test is exact (R1-ENC-010)
+  double betweenness_mean = 0, betweenness_sigma = 0;
+  double bridge_threshold = 0;                // theta of R1-ENC-017
+  std::array<std::uint32_t, 4> count{};       // by Role
+};
+// Hub, bridge, leaf by R1-ENC-010..018 from the graph and its betweenness.
+std::vector<Role> infer_roles(const Graph& g, std::span<const double> betweenness, RoleStats* stats = nullptr);
+// Hub test of R1-ENC-010 for one degree given n, S_1 = sum d and S_2 = sum d^2.
+bool is_hub(std::uint64_t degree, std::uint64_t n, u128 s1, u128 s2);
+
+// ---- overlays (R1-ENC-030..043) ----------------------------------------------------------------
+
+// What an overlay sets for one particle; unset fields keep the schemaless value.
+struct OverlayStyle {
+  std::optional<Shape> shape;
+  std::optional<Rgb8> color;
+  std::optional<Q32> size;  // radius multiplier in (0, 16]
+  friend bool operator==(const OverlayStyle&, const OverlayStyle&) = default;
+};
+
+struct OverlayParticle {
+  std::string key;          // a particle name or 64 hex digits
+  OverlayStyle style;
+  std::size_t line = 0;     // where it was given, for messages (0: built in code)
+  friend bool operator==(const OverlayParticle& a, const OverlayParticle& b) { return a.key == b.key && a.style == b.style; }
+};
+
+// A metadata overlay: crystal-keyed tables plus per-particle entries (R1-ENC-040).
+struct CustomOverlay {
+  std::array<std::optional<Shape>, kCrystalTypes.size()> type_shape;
+  std::array<std::optional<Rgb8>, kCrystalDomains.size()> domain_color;
+  std::array<std::optional<Q32>, kCrystalSizes.size()> size_multiplier;
+  std::vector<OverlayParticle> particles;  // in key order, keys distinct
+  friend bool operator==(const CustomOverlay&, const CustomOverlay&) = default;
+};
+
+inline constexpr std::array<std::string_view, 6> kShapeNames = {"sphere", "torus", "tetrahedron", "cube", "octahedron", "cylinder"};
+// The largest size multiplier an overlay may give (R1-ENC-040).
+inline constexpr std::int64_t kMaxSizeMultiplier = 16;
+
+// The crystal-v5 preset as tables (R1-ENC-031).
+const CustomOverlay& crystal_v5_overlay();
+// Parses the custom TOML format; errors are "NAME:LINE: reason" (R1-ENC-042).
+Result<CustomOverlay> parse_custom_overlay(std::string_view text, const std::string& name);
+Result<CustomOverlay> read_custom_overlay(const std::string& path);
+// Canonical TOML text of an overlay (R1-ENC-043): parse_custom_overlay gives it back.
+std::string custom_overlay_text(const CustomOverlay& overlay);
+// The style of one particle: tables through its crystal metadata, then its own entry.
+OverlayStyle overlay_style(const CustomOverlay& overlay, const CrystalTag& tag, const OverlayStyle* own = nullptr);
+
+// ---- the encoding stage ------------------------------------------------------------------------
+
+struct EncodingOptions {
+  std::string overlay = "none";   // none | crystal-v5 | custom
+  std::string custom_file;        // the TOML file for overlay = custom
+  bool role_shapes = true;        // shapes from roles (R1-ENC-019)
+  BetweennessOptions betweenness; // exact size limit and pivots (R1-ENC-014)
+};
+
+// What the manifest reports beside the Encoding.
+struct EncodingInfo {
+  RoleStats roles;
+  bool betweenness_exact = true;
+  std::uint32_t betweenness_sources = 0;
+  std::uint32_t overlay_particles = 0;  // particles whose style the overlay changed
+};
+
+// The stage (R1-ENC-050). `conventioned` is the sign-conventioned spectrum (u_5 = u[3], u_6 = u[4]).
+Result<Encoding> encode(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus,
+                        const Spectrum<Q32>& conventioned, const EncodingOptions& options = {},
+                        EncodingInfo* info = nullptr, const ProgressFn& progress = {});
+// The same with the overlay given as tables (nullptr: none); options.overlay only labels
+// Encoding::overlay and options.custom_file names the overlay in messages.
+Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus,
+                                     const Spectrum<Q32>& conventioned, const EncodingOptions& options,
+                                     const CustomOverlay* overlay, EncodingInfo* info = nullptr,
+                                     const ProgressFn& progress = {});
+
+}  // namespace r1
