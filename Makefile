@@ -18,13 +18,18 @@ configure: deps
 build: configure
 	@cmake --build build -j $(JOBS)
 
-# The main job on the embedded default graph: generate the crystal graph, then summarise it.
+# The main job on the embedded default graph: generate the crystal graph, summarise it, compute
+# its epoch (focus, spectral layout, frame, encoding, hierarchy) and export it as TSV.
 # Builds only the r1 command, so a first run does not wait for the test suites.
 run: configure
 	@cmake --build build -j $(JOBS) --target r1_cli
 	@mkdir -p $(OUT)
 	@$(R1) gen crystal -o $(OUT)/crystal.graph
 	@$(R1) info $(OUT)/crystal.graph
+	@echo
+	@$(R1) epoch $(OUT)/crystal.graph --overlay crystal-v5 -o $(OUT)/crystal.epoch
+	@$(R1) export $(OUT)/crystal.epoch --tsv $(OUT)/crystal.tsv
+	@echo "per-particle table  $(OUT)/crystal.tsv"
 
 test: build
 	@ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900

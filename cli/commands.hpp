@@ -15,5 +15,8 @@ void add_hash(CLI::App& app, Runner& selected);
 void add_info(CLI::App& app, Runner& selected);
 void add_convert(CLI::App& app, Runner& selected);
 void add_gen(CLI::App& app, Runner& selected);
+void add_export(CLI::App& app, Runner& selected);
+void add_epoch(CLI::App& app, Runner& selected);
+void add_spectrum(CLI::App& app, Runner& selected);
 
 }  // namespace r1::cli

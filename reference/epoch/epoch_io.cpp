@@ -11,6 +11,8 @@
 
 #include "../snapshot/text_util.hpp"
 #include "r1/reference/atomic_dir.hpp"
+#include "r1/reference/frame.hpp"
+#include "r1/reference/hierarchy.hpp"
 #include "r1/reference/input_file.hpp"
 
 namespace r1 {
@@ -80,7 +82,7 @@ bool is_epoch_dir(const fs::path& dir) {
 
 }  // namespace
 
-std::vector<std::pair<std::string, std::string>> epoch_files(const Epoch& e) {
+Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch& e) {
   const std::size_t n = e.ids.size();
   std::vector<std::pair<std::string, std::string>> f;
   {
@@ -130,6 +132,12 @@ std::vector<std::pair<std::string, std::string>> epoch_files(const Epoch& e) {
       for (std::size_t l = 0; l < kLevels; ++l) put_u32(s, e.hierarchy.cluster_of[l][i]);
     f.emplace_back("clusters.u32", std::move(s));
   }
+  f.emplace_back("hierarchy.bin", hierarchy_bytes(e.hierarchy));
+  // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
+  Anchor anchor;
+  for (std::size_t i = 0; i < anchor_count(n); ++i) anchor.entries.push_back({e.ids[i], e.frame.position[i]});
+  R1_ASSIGN(std::string anchor_file, anchor_bytes(anchor));
+  f.emplace_back("anchor.bin", std::move(anchor_file));
   return f;
 }
 
@@ -202,7 +210,7 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
 }
 
 Status write_epoch(const Epoch& e, const fs::path& dir, const EpochWriteOptions& o) {
-  const auto files = epoch_files(e);
+  R1_ASSIGN(const auto files, epoch_files(e));
   AtomicDirectory out(dir, is_epoch_dir);
   R1_TRY(out.open());
   for (const auto& [name, bytes] : files) R1_TRY(out.write(name, bytes));

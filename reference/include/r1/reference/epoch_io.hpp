@@ -15,7 +15,7 @@ struct EpochWriteOptions {
 };
 
 // The canonical bytes of each output file, by file name (manifest.json excluded).
-std::vector<std::pair<std::string, std::string>> epoch_files(const Epoch& e);
+Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch& e);
 std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::string, std::string>>& files,
                            const EpochWriteOptions& o);
 

@@ -1,0 +1,159 @@
+// r1 epoch SNAPSHOT -o DIR: the canonical epoch and its summary (R1-EPO-001..013).
+#include <chrono>
+#include <cstdio>
+#include <optional>
+
+#include "commands.hpp"
+#include "input_options.hpp"
+#include "progress.hpp"
+#include "r1/reference/epoch.hpp"
+#include "r1/reference/epoch_io.hpp"
+#include "r1/reference/graph_build.hpp"
+
+namespace r1::cli {
+
+namespace {
+
+struct EpochCliOptions {
+  std::string snapshot, out;
+  InputOptions input;
+  std::string domain = "q32";
+  // Tri-kernel parameters as decimal text, parsed exactly into Q32 (empty: default).
+  std::string lambda_d, lambda_s, lambda_h, teleport, mu, tau, eps;
+  std::optional<std::uint32_t> max_steps, chebyshev_degree;
+  std::string rho = "auto";
+  std::optional<double> tolerance;
+  std::string anchor;
+  std::string overlay = "none", overlay_file;
+  bool no_role_shapes = false;
+  bool no_timings = false;
+  bool parallel = false;
+  bool quiet = false;
+};
+
+Status parse_q32(const std::string& text, const char* option, Q32& out) {
+  if (text.empty()) return Status::ok();
+  const auto v = Q32::checked_from_decimal(text);
+  if (!v) return Status::input(std::string(option) + " '" + text + "' is not a decimal number in the Q32 range");
+  out = *v;
+  return Status::ok();
+}
+
+Result<EpochOptions> epoch_options(const EpochCliOptions& c) {
+  EpochOptions o;
+  if (c.domain == "q32") {
+    o.domain = NumericDomain::kQ32;
+  } else if (c.domain == "fp64") {
+    o.domain = NumericDomain::kFp64;
+  } else {
+    return Status::input("--domain '" + c.domain + "' is not q32 or fp64");
+  }
+  TriKernelParams& t = o.trikernel;
+  R1_TRY(parse_q32(c.lambda_d, "--lambda-d", t.lambda_d));
+  R1_TRY(parse_q32(c.lambda_s, "--lambda-s", t.lambda_s));
+  R1_TRY(parse_q32(c.lambda_h, "--lambda-h", t.lambda_h));
+  R1_TRY(parse_q32(c.teleport, "--teleport", t.teleport));
+  R1_TRY(parse_q32(c.mu, "--mu", t.mu));
+  R1_TRY(parse_q32(c.tau, "--tau", t.tau));
+  R1_TRY(parse_q32(c.eps, "--eps", t.eps));
+  if (c.max_steps) t.max_steps = *c.max_steps;
+  if (c.chebyshev_degree) t.chebyshev_degree = *c.chebyshev_degree;
+  if (c.rho != "auto") {
+    char* end = nullptr;
+    const double r = std::strtod(c.rho.c_str(), &end);
+    if (c.rho.empty() || *end != '\0' || !std::isfinite(r) || r < 0)
+      return Status::input("--rho '" + c.rho + "' is not 'auto' or a non-negative number");
+    o.spectral.rho = r;
+  }
+  if (c.tolerance) o.spectral.tolerance = *c.tolerance;
+  o.anchor_path = c.anchor;
+  o.encoding.overlay = c.overlay;
+  o.encoding.custom_file = c.overlay_file;
+  o.encoding.role_shapes = !c.no_role_shapes;
+  o.parallel = c.parallel;
+  return o;
+}
+
+void print_summary(const Epoch& e, const std::string& dir, double total_s) {
+  const std::size_t n = e.ids.size();
+  std::printf("epoch              %s (%s domain)\n", dir.c_str(), e.domain == NumericDomain::kQ32 ? "q32" : "fp64");
+  std::printf("particles          %zu, %llu links, %llu component%s\n", n, static_cast<unsigned long long>(e.links),
+              static_cast<unsigned long long>(e.components), e.components == 1 ? "" : "s");
+  std::printf("eigenvalues        ");
+  double worst = 0;
+  for (std::size_t k = 0; k < 6; ++k) {
+    std::printf("%.6g ", e.spectrum.eigenvalues[k]);
+    worst = std::max(worst, e.spectrum.residuals[k]);
+  }
+  std::printf("(rho %g, max residual %.2e)\n", e.spectrum.rho, worst);
+  std::printf("scale              %.6g (R_scene / max |X|)%s\n", e.frame.scale,
+              e.frame.alignment.genesis ? ", genesis frame" : ", aligned to the anchor");
+  if (!e.frame.alignment.genesis)
+    std::printf("alignment          %u anchor particles matched, rms %.3g, scale %.6g%s\n", e.frame.alignment.matched,
+                e.frame.alignment.rms, e.frame.alignment.scale, e.frame.alignment.reflected ? ", reflection absorbed (SC-R)" : "");
+  std::printf("focus              %u tri-kernel steps, kappa %.4f, syntropy %.4f nats\n", e.focus.steps, e.focus.kappa,
+              e.focus.syntropy);
+  for (std::size_t k = 0; k < e.focus.cyberank.size() && k < 5; ++k) {
+    const std::uint32_t i = e.focus.cyberank[k];
+    const std::string name = e.titles[i].empty() ? hemera::to_hex(e.ids[i]).substr(0, 16) : e.titles[i];
+    std::printf("  %zu. %-40.40s %.6f\n", k + 1, name.c_str(), e.focus.phi[i].to_double());
+  }
+  std::printf("clusters           level 0: %zu, level 1: %zu, level 2: %zu, level 3: %zu\n", e.hierarchy.levels[0].size(),
+              e.hierarchy.levels[1].size(), e.hierarchy.levels[2].size(), e.hierarchy.levels[3].size());
+  std::printf("time per stage    ");
+  for (const auto& t : e.timings) std::printf(" %s %.2f s,", t.stage.c_str(), t.seconds);
+  std::printf(" total %.2f s\n", total_s);
+}
+
+Status run_epoch_cli(const EpochCliOptions& c) {
+  if (c.out.empty()) return Status::input("epoch: say where to write the epoch (-o DIR)");
+  R1_ASSIGN(EpochOptions o, epoch_options(c));
+  ProgressLine progress;
+  const auto t0 = std::chrono::steady_clock::now();
+  R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
+  R1_ASSIGN(const Snapshot s, read_snapshot(c.snapshot, ro));
+  R1_ASSIGN(const Graph g, build_graph(s, progress.sink()));
+  const auto t1 = std::chrono::steady_clock::now();
+  R1_ASSIGN(Epoch e, run_epoch(s, g, o, progress.sink()));
+  e.timings.insert(e.timings.begin(), {"read", std::chrono::duration<double>(t1 - t0).count()});
+  const auto t2 = std::chrono::steady_clock::now();
+  EpochWriteOptions wo;
+  wo.timings = !c.no_timings;
+  R1_TRY(write_epoch(e, c.out, wo));
+  e.timings.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count()});
+  progress.finish();
+  if (!c.quiet) print_summary(e, c.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return Status::ok();
+}
+
+}  // namespace
+
+void add_epoch(CLI::App& app, Runner& selected) {
+  auto c = std::make_shared<EpochCliOptions>();
+  auto* cmd = app.add_subcommand("epoch", "compute an epoch: focus, spectral layout, frame, encoding, hierarchy");
+  cmd->add_option("SNAPSHOT", c->snapshot, "snapshot: .graph, TSV/CSV edge list or Matrix Market")->required();
+  cmd->add_option("-o,--out", c->out, "output directory (written atomically)");
+  c->input.add_to(*cmd);
+  cmd->add_option("--domain", c->domain, "numeric domain: q32 (canonical, default) or fp64");
+  cmd->add_option("--lambda-d", c->lambda_d, "diffusion weight (0.5)");
+  cmd->add_option("--lambda-s", c->lambda_s, "springs weight (0.3)");
+  cmd->add_option("--lambda-h", c->lambda_h, "heat weight (0.2)");
+  cmd->add_option("--teleport", c->teleport, "diffusion teleport (0.15)");
+  cmd->add_option("--mu", c->mu, "springs screening (1)");
+  cmd->add_option("--tau", c->tau, "heat time (1)");
+  cmd->add_option("--eps", c->eps, "target error that fixes the step count T(eps) (0.000001)");
+  cmd->add_option("--max-steps", c->max_steps, "cap on T(eps) (500)");
+  cmd->add_option("--chebyshev-degree", c->chebyshev_degree, "heat kernel polynomial degree (8)");
+  cmd->add_option("--rho", c->rho, "Laplacian regularisation: auto (0 when connected) or a value");
+  cmd->add_option("--tolerance", c->tolerance, "eigen-residual target (1e-9)");
+  cmd->add_option("--anchor", c->anchor, "anchor file of an earlier epoch: align to it (Procrustes)");
+  cmd->add_option("--overlay", c->overlay, "none (default), crystal-v5 or custom");
+  cmd->add_option("--overlay-file", c->overlay_file, "TOML lookup tables for --overlay custom");
+  cmd->add_flag("--no-role-shapes", c->no_role_shapes, "all spheres instead of hub/bridge/leaf shapes");
+  cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");
+  cmd->add_flag("--parallel", c->parallel, "use every core for the sparse products (same bits)");
+  cmd->add_flag("-q,--quiet", c->quiet, "no summary");
+  cmd->callback([c, &selected] { selected = [c] { return run_epoch_cli(*c); }; });
+}
+
+}  // namespace r1::cli

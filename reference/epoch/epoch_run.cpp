@@ -1,0 +1,118 @@
+// The epoch pipeline: stages in order, domains, timings (R1-EPO-001..004).
+#include "r1/reference/epoch.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "r1/reference/focus.hpp"
+#include "r1/reference/frame.hpp"
+#include "r1/reference/spectral.hpp"
+
+namespace r1 {
+
+namespace {
+
+class Stopwatch {
+ public:
+  explicit Stopwatch(std::vector<StageTiming>& out) : out_(out), t_(std::chrono::steady_clock::now()) {}
+  void lap(const char* stage) {
+    const auto now = std::chrono::steady_clock::now();
+    out_.push_back({stage, std::chrono::duration<double>(now - t_).count()});
+    t_ = now;
+  }
+
+ private:
+  std::vector<StageTiming>& out_;
+  std::chrono::steady_clock::time_point t_;
+};
+
+// fp64 vectors enter the Q32 stages rounded entry by entry, to nearest, ties to even (R1-EPO-003).
+Result<Spectrum<Q32>> to_q32(const Spectrum<double>& s) {
+  Spectrum<Q32> q;
+  q.n = s.n;
+  q.rho = s.rho;
+  q.eigenvalues = s.eigenvalues;
+  q.residuals = s.residuals;
+  q.found = s.found;
+  q.restarts = s.restarts;
+  q.matvecs = s.matvecs;
+  for (std::size_t k = 0; k < 5; ++k) {
+    q.u[k].reserve(s.u[k].size());
+    for (double x : s.u[k]) {
+      const auto v = Q32::checked_from_double(x);
+      if (!v) return Status::internal("fp64 eigenvector entry is not finite or out of the Q32 range");
+      q.u[k].push_back(*v);
+    }
+  }
+  return q;
+}
+
+}  // namespace
+
+Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const ProgressFn& progress) {
+  Epoch e;
+  Stopwatch clock(e.timings);
+  e.domain = o.domain;
+  e.source = snapshot.source;
+  e.snapshot_digest = snapshot_digest(snapshot);  // Hemera over every record: its own lap
+  clock.lap("digest");
+  e.ids = snapshot.particles;
+  e.titles.resize(snapshot.particles.size());
+  for (std::size_t i = 0; i < e.titles.size(); ++i) {
+    // A display title: the title, else the name of a text input (R1-EPO-011 titles.tsv).
+    if (i < snapshot.titles.size() && !snapshot.titles[i].empty()) {
+      e.titles[i] = snapshot.titles[i];
+    } else if (i < snapshot.names.size()) {
+      e.titles[i] = snapshot.names[i];
+    }
+  }
+  e.links = graph.links;
+  e.components = graph.component_size.size();
+  e.trikernel = o.trikernel;
+  e.spectral_params = o.spectral;
+
+  SpectralOptions so;
+  so.parallel = o.parallel;
+  FocusOptions fo;
+  fo.parallel = o.parallel;
+  if (o.domain == NumericDomain::kQ32) {
+    R1_ASSIGN(e.spectrum, spectral_embedding_q32(graph, o.spectral, progress, so));
+  } else {
+    R1_ASSIGN(const Spectrum<double> s, spectral_embedding_f64(graph, o.spectral, progress, so));
+    R1_ASSIGN(e.spectrum, to_q32(s));
+  }
+  clock.lap("spectral");
+
+  // R1-EPO-002: lambda_2 for T(eps); 0 for a disconnected graph.
+  const double lambda2 = e.components == 1 && e.spectrum.found >= 1 ? e.spectrum.eigenvalues[1] : 0.0;
+  if (o.domain == NumericDomain::kQ32) {
+    R1_ASSIGN(e.focus, compute_focus_q32(graph, o.trikernel, lambda2, progress, fo));
+  } else {
+    R1_ASSIGN(const Focus<double> f, compute_focus_f64(graph, o.trikernel, lambda2, progress, fo));
+    e.focus.steps = f.steps;
+    e.focus.kappa = f.kappa;
+    e.focus.lambda_max = f.lambda_max;
+    e.focus.syntropy = f.syntropy;
+    e.focus.cyberank = f.cyberank;
+    R1_ASSIGN(e.focus.phi, simplex_from_f64(f.phi));  // R1-EPO-004
+  }
+  clock.lap("focus");
+
+  apply_sign_convention(e.spectrum);
+  std::optional<Anchor> anchor;
+  if (!o.anchor_path.empty()) {
+    R1_ASSIGN(Anchor a, read_anchor(o.anchor_path));
+    anchor = std::move(a);
+  }
+  R1_ASSIGN(e.frame, compute_frame(snapshot, e.spectrum, anchor ? &*anchor : nullptr, o.anchor_path));
+  clock.lap("frame");
+
+  R1_ASSIGN(e.encoding, encode(snapshot, graph, e.focus, e.spectrum, o.encoding, nullptr, progress));
+  clock.lap("encoding");
+
+  R1_ASSIGN(e.hierarchy, build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
+  clock.lap("hierarchy");
+  return e;
+}
+
+}  // namespace r1
