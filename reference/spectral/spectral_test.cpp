@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <boost/multiprecision/cpp_int.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_builder.hpp"
+#include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
 #include "test_support.hpp"
 
@@ -424,6 +426,45 @@ TEST(Spectral, MatrixMarketExportIsTheOperator) {
   // And it matches the independent dense Laplacian to the Q32 entry rounding.
   const Eigen::MatrixXd dense = dense_laplacian(g, op->rho.to_double());
   EXPECT_LT((l - gv * gv.transpose() - dense).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+// R1-SPEC-005: y = L~ x with one rounding per row, whichever path the row takes (the unchecked
+// i128 sum for x raws below 2^57, the checked exact sum above), against cpp_int.
+TEST(Spectral, OperatorApplicationIsExactOnBothPaths) {
+  using boost::multiprecision::cpp_int;
+  const r1::Graph g = from_links({{"a", "b", 1}, {"b", "c", 3}, {"c", "a", 2}, {"c", "d", 1}, {"e", "f", 5}, {"f", "a", 1}});
+  for (const double rho : {0.0, 0.75}) {
+    r1::SpectralParams params = defaults();
+    params.rho = rho;
+    auto op = r1::spectral_operator_q32(g, params);
+    ASSERT_TRUE(op.is_ok()) << op.status().message();
+    for (const int bits : {40, 60}) {
+      SCOPED_TRACE(bits);
+      std::vector<r1::fx::Q32> x(g.n), y(g.n);
+      for (std::size_t i = 0; i < g.n; ++i) {
+        const auto r = r1::rng::bits(5, i, static_cast<std::uint64_t>(bits));
+        x[i] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(r >> (64 - bits)) * ((r & 1) ? -1 : 1));
+      }
+      op->apply(x.data(), y.data());
+      auto rne32 = [](const cpp_int& v) {  // RNE(v / 2^32)
+        const cpp_int den = cpp_int(1) << 32;
+        cpp_int q = v / den;
+        if (q * den > v) --q;
+        const cpp_int rem = v - q * den;
+        if (2 * rem > den || (2 * rem == den && (q & 1) != 0)) ++q;
+        return q;
+      };
+      cpp_int c = 0;
+      for (std::size_t j = 0; j < op->g.size(); ++j) c += cpp_int(op->g[j].raw) * x[j].raw;
+      c = rne32(c);
+      for (std::size_t i = 0; i < g.n; ++i) {
+        cpp_int v = cpp_int(x[i].raw) << 32;
+        for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) v -= cpp_int(op->m[k].raw) * x[g.col[k]].raw;
+        if (!op->g.empty()) v -= cpp_int(op->g[i].raw) * c;
+        EXPECT_EQ(cpp_int(y[i].raw), rne32(v)) << "row " << i << " rho " << rho;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -47,10 +47,6 @@ constexpr int kCoefBits = 60;  // coefficients of combinations are multiples of 
 
 i128 product(std::int64_t a, std::int64_t b) { return static_cast<i128>(a) * b; }
 
-// A bit pattern whose highest set bit bounds |x| (x ^ (x >> 63) is |x| - 1 for negatives, |x|
-// otherwise); OR-ing these over a block bounds every magnitude in it without a branch.
-std::uint64_t magnitude_bits(std::int64_t x) { return static_cast<std::uint64_t>(x ^ (x >> 63)); }
-
 // The fast paths below add products in a plain i128 without overflow checks. They are taken only
 // when every factor's magnitude is below 2^kSafeBits, so that the sum provably fits:
 // dots: a block of kBlock = 2^12 products of two such raws is below 2^(12 + 2 * 57) = 2^126;
@@ -93,14 +89,14 @@ void VectorOps<fx::Q32>::dots(std::span<const fx::Q32* const> qs, std::span<cons
     for (std::size_t q = 0; q < k; ++q) {
       const fx::Q32* v = qs[q];
       FastExact& a = acc[q];
-      i128 sum = 0;
+      u128 sum = 0;  // unsigned: a speculative sum may wrap (defined); it is used only when it cannot
       std::uint64_t vbits = 0;
       for (std::size_t i = lo; i < hi; ++i) {
-        sum += product(v[i].raw, w[i].raw);
+        sum += static_cast<u128>(product(v[i].raw, w[i].raw));
         vbits |= magnitude_bits(v[i].raw);
       }
       if (((wbits | vbits) >> kSafeBits) == 0) {
-        a.add(sum);  // every factor below 2^57: the plain sum was exact (see kSafeBits)
+        a.add(static_cast<i128>(sum));  // every factor below 2^57: the sum was exact (see kSafeBits)
       } else {
         for (std::size_t i = lo; i < hi; ++i) a.add(product(v[i].raw, w[i].raw));
       }
@@ -127,11 +123,11 @@ void VectorOps<fx::Q32>::combine(std::span<fx::Q32> out, const fx::Q32* base, st
   const i128 one = i128{1} << kCoefBits;
   for_blocks(n_, parallel_, [&](std::size_t lo, std::size_t hi) {
     // The block's sums are formed vector by vector (each x read sequentially), then rounded.
-    std::vector<i128> sum(hi - lo, 0);
+    std::vector<u128> sum(hi - lo, 0);  // unsigned: may wrap (defined); used only when it cannot
     std::vector<std::uint64_t> bits(hi - lo, 0);
     if (base != nullptr)
       for (std::size_t i = lo; i < hi; ++i) {
-        sum[i - lo] = static_cast<i128>(base[i].raw) * one;
+        sum[i - lo] = static_cast<u128>(static_cast<i128>(base[i].raw) * one);
         bits[i - lo] = magnitude_bits(base[i].raw);
       }
     if (k <= kMaxFastTerms)
@@ -139,13 +135,13 @@ void VectorOps<fx::Q32>::combine(std::span<fx::Q32> out, const fx::Q32* base, st
         const fx::Q32* x = xs[q];
         const std::int64_t cq = coef[q];
         for (std::size_t i = lo; i < hi; ++i) {
-          sum[i - lo] += product(cq, x[i].raw);
+          sum[i - lo] += static_cast<u128>(product(cq, x[i].raw));
           bits[i - lo] |= magnitude_bits(x[i].raw);
         }
       }
     for (std::size_t i = lo; i < hi; ++i) {
       if (k <= kMaxFastTerms && (bits[i - lo] >> kSafeBits) == 0) {  // the plain sum was exact (kSafeBits)
-        const i128 r = fx::detail::rne_shift(sum[i - lo], kCoefBits);
+        const i128 r = fx::detail::rne_shift(static_cast<i128>(sum[i - lo]), kCoefBits);
         if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
         out[i] = fx::Q32::from_raw(static_cast<std::int64_t>(r));
         continue;

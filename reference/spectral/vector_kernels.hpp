@@ -49,6 +49,11 @@ class FastExact {
   bool spilled_ = false;
 };
 
+// A bit pattern whose highest set bit bounds |x| (x ^ (x >> 63) is |x| - 1 for negatives, |x|
+// otherwise); OR-ing these over a block bounds every magnitude in it without a branch. The
+// unchecked i128 fast paths test it against their proven bounds.
+inline std::uint64_t magnitude_bits(std::int64_t x) { return static_cast<std::uint64_t>(x ^ (x >> 63)); }
+
 // The operations the Lanczos driver needs, for Scalar = fx::Q32 (canonical) or double.
 // Vectors have n entries; `e` fixes the scaled inner product <x, y> = 2^-e sum_i x_i y_i, under
 // which basis vectors have unit length while their entries stay O(1) (R1-SPEC-011).
