@@ -82,6 +82,10 @@ TEST(CliEpoch, ExportWritesOneRowPerParticleWithTheDocumentedHeader) {
     EXPECT_EQ(std::count(rows[i].begin(), rows[i].end(), '\t'), 16) << rows[i];
     EXPECT_EQ(rows[i].find('\t'), 64u) << rows[i];
   }
+  // `--tsv -` prints the same table.
+  const auto out = run_cli({"export", (d / "e").string(), "--tsv", "-"});
+  ASSERT_EQ(out.exit_code, 0) << out.err;
+  EXPECT_EQ(out.out, r1::test::read_file(d / "e.tsv"));
 }
 
 TEST(CliEpoch, TinyAndDisconnectedGraphs) {
