@@ -1,0 +1,82 @@
+// Hierarchy build throughput (R1-HIER-010..033) on synthetic layouts of 10^4, 10^5 and 10^6
+// particles: points clustered in blobs inside the scene sphere (as spectral layouts are), phi
+// spread unevenly, every rule exact on Q32 raws. Input generation is outside the timed loop.
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "r1/fixedpoint/counter_rng.hpp"
+#include "r1/fixedpoint/hemera.hpp"
+#include "r1/reference/hierarchy.hpp"
+
+namespace {
+
+struct Layout {
+  std::vector<std::array<r1::Q32, 3>> pos;
+  std::vector<r1::Q32> phi;
+  std::vector<r1::Color> color;
+  std::vector<r1::ParticleId> ids;
+};
+
+// n points in sqrt(n) blobs: blob centres uniform in a cube of side 1600 scene units, members
+// within +-40 units of their centre (uniform per axis). phi raws 1 + (i mod 97), the remainder of
+// 2^32 spread one raw at a time from particle 0, so the raws sum to exactly 2^32.
+Layout make_layout(std::size_t n) {
+  Layout l;
+  l.pos.resize(n);
+  l.phi.resize(n);
+  l.color.resize(n);
+  std::size_t blobs = 1;
+  while (blobs * blobs < n) ++blobs;
+  std::int64_t total = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t b = r1::rng::uniform_below(3, i, 0, blobs);
+    for (int c = 0; c < 3; ++c) {
+      const double centre = 1600.0 * r1::rng::uniform_double(5, b, static_cast<std::uint64_t>(c)) - 800.0;
+      const double offset = 80.0 * r1::rng::uniform_double(7, i, static_cast<std::uint64_t>(c)) - 40.0;
+      l.pos[i][static_cast<std::size_t>(c)] = r1::Q32::from_double(centre + offset);
+    }
+    l.phi[i] = r1::Q32::from_raw(static_cast<std::int64_t>(1 + i % 97));
+    total += l.phi[i].raw;
+    l.color[i] = {static_cast<std::uint8_t>(b), static_cast<std::uint8_t>(b >> 8), 128};
+  }
+  const std::int64_t rest = (std::int64_t{1} << 32) - total;
+  for (std::size_t i = 0; i < n; ++i)
+    l.phi[i].raw += rest / static_cast<std::int64_t>(n) + (static_cast<std::int64_t>(i) < rest % static_cast<std::int64_t>(n) ? 1 : 0);
+  std::vector<std::string> names(n);
+  for (std::size_t i = 0; i < n; ++i) names[i] = "bench/" + std::to_string(i);
+  l.ids.resize(n);
+  r1::hemera::hash_many(names, l.ids);
+  return l;
+}
+
+const Layout& layout(std::size_t n) {
+  static std::map<std::size_t, std::unique_ptr<Layout>> cache;
+  auto& slot = cache[n];
+  if (!slot) slot = std::make_unique<Layout>(make_layout(n));
+  return *slot;
+}
+
+void BM_Hierarchy(benchmark::State& state) {
+  const Layout& l = layout(static_cast<std::size_t>(state.range(0)));
+  std::size_t clusters = 0;
+  for (auto _ : state) {
+    auto h = r1::build_hierarchy(l.pos, l.phi, l.color, l.ids);
+    if (!h.is_ok()) {
+      state.SkipWithError(h.status().message().c_str());
+      return;
+    }
+    clusters = h->levels[0].size();
+    benchmark::DoNotOptimize(clusters);
+  }
+  state.counters["level0_clusters"] = static_cast<double>(clusters);
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_Hierarchy)->Arg(10'000)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace
