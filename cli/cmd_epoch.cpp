@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "input_options.hpp"
 #include "progress.hpp"
+#include "timing.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/graph_build.hpp"
@@ -113,16 +114,16 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
   R1_ASSIGN(const Snapshot s, read_snapshot(c.snapshot, ro));
   R1_ASSIGN(const Graph g, build_graph(s, progress.sink()));
-  const auto t1 = std::chrono::steady_clock::now();
+  const double read_s = seconds_since(t0);
   R1_ASSIGN(Epoch e, run_epoch(s, g, o, progress.sink()));
-  e.timings.insert(e.timings.begin(), {"read", std::chrono::duration<double>(t1 - t0).count()});
+  e.timings.insert(e.timings.begin(), {"read", read_s});
   const auto t2 = std::chrono::steady_clock::now();
   EpochWriteOptions wo;
   wo.timings = !c.no_timings;
   R1_TRY(write_epoch(e, c.out, wo));
-  e.timings.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count()});
+  e.timings.push_back({"write", seconds_since(t2)});
   progress.finish();
-  if (!c.quiet) print_summary(e, c.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  if (!c.quiet) print_summary(e, c.out, seconds_since(t0));
   return Status::ok();
 }
 

@@ -1,6 +1,4 @@
 // r1 info FILE [--json]: counts, components, degrees and the snapshot digest (R1-IN-060).
-#include <sys/resource.h>
-
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -9,6 +7,7 @@
 #include "commands.hpp"
 #include "input_options.hpp"
 #include "progress.hpp"
+#include "timing.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_io.hpp"
 #include "r1/reference/summary.hpp"
@@ -24,16 +23,6 @@ struct InfoOptions {
   bool no_digest = false;
   bool timings = false;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-double peak_rss_mib() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
 
 nlohmann::json stats_json(const DegreeStats& d) {
   return {{"min", d.min}, {"max", d.max}, {"mean", d.mean}, {"median", d.median}};

@@ -1,7 +1,5 @@
 // r1 spectrum FILE: the spectral embedding alone, for inspection, timing and the eigsh peer
 // comparison (R1-SPEC-060..064, R1-SPEC-070..071).
-#include <sys/resource.h>
-
 #include <bit>
 #include <chrono>
 #include <cstdio>
@@ -12,6 +10,7 @@
 #include "commands.hpp"
 #include "input_options.hpp"
 #include "progress.hpp"
+#include "timing.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_io.hpp"
@@ -33,16 +32,6 @@ struct SpectrumOptions {
   bool json = false;
   std::string vectors, laplacian;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-double peak_rss_mib() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
 
 double as_double(fx::Q32 v) { return v.to_double(); }
 double as_double(double v) { return v; }
