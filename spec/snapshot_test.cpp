@@ -1,5 +1,6 @@
 // The 128-byte record layout and the snapshot digest (R1-IN-020..024, R1-IN-040).
 #include "r1/spec/snapshot.hpp"
+#include "r1/spec/status.hpp"
 
 #include <gtest/gtest.h>
 
@@ -67,6 +68,15 @@ TEST(Anchor, FirstMinOf1024AndCount) {
   EXPECT_EQ(r1::anchor_count(7), 7u);
   EXPECT_EQ(r1::anchor_count(1024), 1024u);
   EXPECT_EQ(r1::anchor_count(5040), 1024u);
+}
+
+TEST(StatusMessage, ControlBytesAreEscapedSoErrorsStayOneLine) {
+  EXPECT_EQ(r1::Status::input("plain\tkey").message(), "plain\tkey");
+  EXPECT_EQ(r1::Status::input("o.toml:1: unknown key 'a\nb'").message(), "o.toml:1: unknown key 'a\\x0ab'");
+  EXPECT_EQ(r1::Status::output(std::string("\r\x7f", 2)).message(), "\\x0d\\x7f");
+  const auto prefixed = r1::Status::input(std::string("x\0y", 3)).with_prefix("f\n: ");
+  EXPECT_EQ(prefixed.message(), "f\\x0a: x\\x00y");
+  EXPECT_EQ(prefixed.kind(), r1::ErrorKind::kInput);
 }
 
 }  // namespace

@@ -38,7 +38,26 @@ class Status {
   }
 
  private:
-  Status(ErrorKind k, std::string m) : kind_(k), message_(std::move(m)) {}
+  Status(ErrorKind k, std::string m) : kind_(k), message_(one_line(std::move(m))) {}
+
+  // Errors are one line (R1-ERR-001) even when they quote hostile input: a control byte other
+  // than tab is shown as \xNN.
+  static std::string one_line(std::string m) {
+    std::string out;
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      const auto u = static_cast<unsigned char>(m[i]);
+      if ((u >= 0x20 && u != 0x7F) || u == '\t') {
+        if (!out.empty()) out.push_back(m[i]);
+        continue;
+      }
+      if (out.empty()) out.assign(m, 0, i);
+      constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out.push_back(kHex[u >> 4]);
+      out.push_back(kHex[u & 15]);
+    }
+    return out.empty() ? m : out;
+  }
   std::optional<ErrorKind> kind_;
   std::string message_;
 };
