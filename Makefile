@@ -19,7 +19,8 @@ build: configure
 	@cmake --build build -j $(JOBS)
 
 # The main job on the embedded default graph: generate the crystal graph, summarise it, compute
-# its epoch (focus, spectral layout, frame, encoding, hierarchy) and export it as TSV.
+# its epoch (focus, spectral layout, frame, encoding, hierarchy), export it as TSV and render it
+# from four orbit views and one far view.
 # Builds only the r1 command, so a first run does not wait for the test suites.
 run: configure
 	@cmake --build build -j $(JOBS) --target r1_cli
@@ -30,6 +31,11 @@ run: configure
 	@$(R1) epoch $(OUT)/crystal.graph --overlay crystal-v5 -o $(OUT)/crystal.epoch
 	@$(R1) export $(OUT)/crystal.epoch --tsv $(OUT)/crystal.tsv
 	@echo "per-particle table  $(OUT)/crystal.tsv"
+	@echo
+	@mkdir -p $(OUT)/views
+	@$(R1) render $(OUT)/crystal.epoch --orbit 4 --size 960x540 -o $(OUT)/views/crystal.png
+	@$(R1) render $(OUT)/crystal.epoch --distance 12000 --size 960x540 -o $(OUT)/views/crystal-far.png
+	@echo "views              $(OUT)/views/ (crystal-000..003.png: orbit; crystal-far.png: the T-infinity far field)"
 
 test: build
 	@ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900

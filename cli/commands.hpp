@@ -18,5 +18,6 @@ void add_gen(CLI::App& app, Runner& selected);
 void add_export(CLI::App& app, Runner& selected);
 void add_epoch(CLI::App& app, Runner& selected);
 void add_spectrum(CLI::App& app, Runner& selected);
+void add_render(CLI::App& app, Runner& selected);
 
 }  // namespace r1::cli

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   r1::cli::add_epoch(app, selected);
   r1::cli::add_export(app, selected);
   r1::cli::add_spectrum(app, selected);
+  r1::cli::add_render(app, selected);
 
   try {
     app.parse(argc, argv);

@@ -18,3 +18,10 @@ endif()
 if(R1_BUILD_BENCH AND NOT R1_SANITIZE AND NOT R1_FUZZ)
   find_package(benchmark REQUIRED)
 endif()
+# The frame renderer's images: OpenImageIO (EXR, PNG, text) and OpenColorIO (display transform).
+find_package(OpenImageIO 2.4 REQUIRED CONFIG)
+# Debian 12's OpenColorIO CMake package file sits in /usr/share/cmake and computes a wrong prefix
+# ("/include"); its pkg-config file is right, so use that.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(R1_OCIO REQUIRED IMPORTED_TARGET OpenColorIO>=2.1)
+add_library(OpenColorIO::OpenColorIO ALIAS PkgConfig::R1_OCIO)

@@ -1,4 +1,5 @@
-// The r1 command end to end: hash, info, convert (R1-HASH-010, R1-IN-006, R1-IN-060).
+// The r1 command end to end: hash, info, convert, export --ply (R1-HASH-010, R1-IN-006, R1-IN-060,
+// R1-RND-095).
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -106,6 +107,30 @@ TEST(CliConvert, GraphWithoutNamesCannotBecomeAnEdgeList) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("no names"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(d / "x.tsv"));
+}
+
+TEST(CliExport, PlyIsWrittenAtomically) {
+  r1::test::TempDir d;
+  ASSERT_EQ(run_cli({"gen", "grid", "--dims", "6x5", "-o", (d / "g.graph").string()}).exit_code, 0);
+  ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "-q", "-o", (d / "e").string()}).exit_code, 0);
+  auto r = run_cli({"export", (d / "e").string(), "--ply", (d / "e.ply").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string ply = r1::test::read_file(d / "e.ply");
+  EXPECT_EQ(ply.substr(0, 4), "ply\n");
+  EXPECT_NE(ply.find("element vertex 30\n"), std::string::npos);
+  // Both outputs at once give the same .ply; neither is an input error (exit 2).
+  r = run_cli({"export", (d / "e").string(), "--tsv", (d / "e.tsv").string(), "--ply", (d / "f.ply").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r1::test::read_file(d / "f.ply"), ply);
+  EXPECT_TRUE(fs::exists(d / "e.tsv"));
+  EXPECT_EQ(run_cli({"export", (d / "e").string()}).exit_code, 2);
+  // A target whose directory does not exist: exit 3 (output refused), nothing written.
+  r1::test::write_file(d / "plain", "");
+  const fs::path bad = d / "plain" / "x.ply";
+  r = run_cli({"export", (d / "e").string(), "--ply", bad.string()});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_FALSE(fs::exists(bad));
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "r1-epoch";
-constexpr int kVersion = 1;
+constexpr int kVersion = 2;  // 2: edges.bin; hierarchy.bin read back and checked
 
 void put_i64(std::string& out, std::int64_t v) {
   for (int b = 0; b < 8; ++b) out.push_back(static_cast<char>(static_cast<std::uint64_t>(v) >> (8 * b)));
@@ -64,6 +64,8 @@ const char* role_name(Role r) {
   }
   return "none";
 }
+
+constexpr std::size_t kEdgeBytes = 24;  // u32 p, u32 q, i64 w, i64 a2
 
 const char* domain_name(NumericDomain d) { return d == NumericDomain::kQ32 ? "q32" : "fp64"; }
 
@@ -133,6 +135,17 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
     f.emplace_back("clusters.u32", std::move(s));
   }
   f.emplace_back("hierarchy.bin", hierarchy_bytes(e.hierarchy));
+  {
+    std::string s;
+    s.reserve(e.edges.size() * kEdgeBytes);
+    for (const LayoutEdge& edge : e.edges) {
+      put_u32(s, edge.p);
+      put_u32(s, edge.q);
+      put_i64(s, edge.w_raw);
+      put_i64(s, edge.a2_raw);
+    }
+    f.emplace_back("edges.bin", std::move(s));
+  }
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
   for (std::size_t i = 0; i < anchor_count(n); ++i) anchor.entries.push_back({e.ids[i], e.frame.position[i]});
@@ -150,6 +163,7 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
                    {"digest", hex(e.snapshot_digest)},
                    {"particles", e.ids.size()},
                    {"links", e.links},
+                   {"layout_edges", e.edges.size()},
                    {"components", e.components}};
   m["domain"] = domain_name(e.domain);
   const TriKernelParams& t = e.trikernel;
@@ -286,12 +300,36 @@ Status read_titles(const InputFile& f, const std::string& where, Epoch& e) {
   return Status::ok();
 }
 
+// edges.bin (R1-EPO-011): `count` rows of 24 bytes, strictly ascending (p, q) with p < q < n,
+// 0 < w <= 1 and |a2| <= w.
+Status read_edges(const EpochFiles& files, const fs::path& path, std::size_t n, std::size_t count, Epoch& e) {
+  const InputFile* f = files.find("edges.bin");
+  if (!f) return Status::input(path.string() + ": not listed in the manifest");
+  const std::string_view b = f->text();
+  if (b.size() != count * kEdgeBytes)
+    return Status::input(path.string() + ": " + std::to_string(b.size()) + " bytes for " + std::to_string(count) +
+                         " layout edges (expected " + std::to_string(count * kEdgeBytes) + ")");
+  e.edges.resize(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    const char* r = b.data() + k * kEdgeBytes;
+    LayoutEdge& edge = e.edges[k];
+    edge = {get_u32(r), get_u32(r + 4), get_i64(r + 8), get_i64(r + 16)};
+    const bool ordered = k == 0 || std::pair(e.edges[k - 1].p, e.edges[k - 1].q) < std::pair(edge.p, edge.q);
+    if (edge.p >= edge.q || edge.q >= n || !ordered || edge.w_raw <= 0 || edge.w_raw > Q32::kOneRaw ||
+        edge.a2_raw < -edge.w_raw || edge.a2_raw > edge.w_raw)
+      return Status::input(path.string() + ": byte " + std::to_string(k * kEdgeBytes) +
+                           ": layout edge out of order or out of range");
+  }
+  return Status::ok();
+}
+
 Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   const std::string manifest = (dir / "manifest.json").string();
   if (m.value("format", "") != kFormat) return Status::input(manifest + ": not an r1 epoch manifest");
   if (m.value("version", 0) != kVersion)
     return Status::input(manifest + ": epoch version " + std::to_string(m.value("version", 0)) +
-                         " is not supported (r1 reads version 1)");
+                         " is not supported (r1 reads version " + std::to_string(kVersion) +
+                         "): compute it again with r1 epoch");
   Epoch e;
   const std::size_t n = m.at("snapshot").at("particles").get<std::size_t>();
   e.source = m.at("snapshot").at("source").get<std::string>();
@@ -349,6 +387,17 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   }
   e.titles.assign(n, {});
   if (const InputFile* t = files.find("titles.tsv")) R1_TRY(read_titles(*t, (dir / "titles.tsv").string(), e));
+  R1_TRY(read_edges(files, dir / "edges.bin", n, m.at("snapshot").at("layout_edges").get<std::size_t>(), e));
+  // The hierarchy the renderer walks: parsed, and checked against the particle data (R1-HIER-052).
+  const std::string hier_path = (dir / "hierarchy.bin").string();
+  const InputFile* hier = files.find("hierarchy.bin");
+  if (!hier) return Status::input(hier_path + ": not listed in the manifest");
+  R1_ASSIGN(e.hierarchy, parse_hierarchy_bytes(hier->text(), hier_path));
+  if (e.hierarchy.cluster_of[0].size() != n)
+    return Status::input(hier_path + ": hierarchy of " + std::to_string(e.hierarchy.cluster_of[0].size()) + " particles, the epoch has " +
+                         std::to_string(n));
+  const Status valid = check_hierarchy(e.hierarchy, e.frame.position, e.focus.phi, e.encoding.color, e.ids);
+  if (!valid) return Status::input(hier_path + ": " + valid.message());
   return e;
 }
 

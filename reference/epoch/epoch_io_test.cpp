@@ -1,6 +1,7 @@
 // The epoch directory: round trip, digests, atomic replacement, refusal to clobber, export
 // (R1-EPO-010..020).
 #include "r1/reference/epoch_io.hpp"
+#include "r1/reference/hierarchy.hpp"
 
 #include <gtest/gtest.h>
 
@@ -23,7 +24,9 @@ r1::Epoch synthetic(std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
     e.ids.push_back(r1::hemera::hash("p" + std::to_string(i)));
     e.titles.push_back(i % 3 == 0 ? "title\t" + std::to_string(i) : "");
-    e.focus.phi.push_back(Q32::from_raw(static_cast<std::int64_t>(i + 1)));
+    // phi raws sum to exactly 2^32 (the hierarchy check requires a focus distribution).
+    const std::int64_t share = Q32::kOneRaw / static_cast<std::int64_t>(n);
+    e.focus.phi.push_back(Q32::from_raw(i == 0 ? Q32::kOneRaw - share * static_cast<std::int64_t>(n - 1) : share));
     e.frame.position.push_back({Q32::from_int(static_cast<std::int64_t>(i)), Q32::from_raw(-5), Q32::from_decimal("0.25")});
     e.encoding.radius.push_back(Q32::from_raw(static_cast<std::int64_t>(7 * i)));
     e.encoding.luminosity.push_back(Q32::from_raw(static_cast<std::int64_t>(i + 1)));
@@ -35,8 +38,10 @@ r1::Epoch synthetic(std::size_t n) {
   }
   for (std::size_t k = 0; k < 5; ++k)
     for (std::size_t i = 0; i < n; ++i) e.spectrum.u[k].push_back(Q32::from_raw(static_cast<std::int64_t>(k * 1000 + i) - 50));
-  for (std::size_t l = 0; l < r1::kLevels; ++l)
-    for (std::size_t i = 0; i < n; ++i) e.hierarchy.cluster_of[l].push_back(static_cast<std::uint32_t>(i >> (2 * l)));
+  auto h = r1::build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids);
+  EXPECT_TRUE(h.is_ok()) << h.status().message();
+  if (h.is_ok()) e.hierarchy = *h;
+  for (std::uint32_t i = 0; i + 1 < n; ++i) e.edges.push_back({i, i + 1, Q32::kOneRaw / (i + 1), i % 2 ? -1 : 0});
   e.focus.cyberank = {2, 1, 0};
   e.spectrum.eigenvalues = {0, 0.1, 0.2, 0.3, 0.4, 0.5};
   e.timings = {{"spectral", 1.5}};
@@ -57,6 +62,9 @@ TEST(EpochIo, WriteReadRoundTrip) {
   EXPECT_EQ(back->encoding.role, e.encoding.role);
   EXPECT_EQ(back->encoding.color, e.encoding.color);
   EXPECT_EQ(back->hierarchy.cluster_of, e.hierarchy.cluster_of);
+  EXPECT_EQ(r1::hierarchy_bytes(back->hierarchy), r1::hierarchy_bytes(e.hierarchy));
+  EXPECT_EQ(back->hierarchy.tau0, e.hierarchy.tau0);
+  EXPECT_EQ(back->edges, e.edges);
   EXPECT_EQ(back->spectrum.eigenvalues, e.spectrum.eigenvalues);
   // Rewriting what was read gives the same files.
   r1::EpochWriteOptions quiet;
@@ -95,6 +103,24 @@ TEST(EpochIo, ModifiedOrTruncatedFilesAreRefused) {
   fs::remove(d / "ep/role.u8");
   EXPECT_FALSE(r1::read_epoch(d / "ep").is_ok());
   EXPECT_FALSE(r1::read_epoch(d / "nothing").is_ok());
+}
+
+// A writer that gets the digests right but the content wrong: the semantic checks still refuse it.
+TEST(EpochIo, ConsistentDigestsDoNotHideBadEdgesOrHierarchy) {
+  r1::test::TempDir d;
+  auto e = synthetic(8);
+  std::swap(e.edges[0], e.edges[1]);  // out of (p, q) order
+  ASSERT_TRUE(r1::write_epoch(e, d / "a").is_ok());
+  auto r = r1::read_epoch(d / "a");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("edges.bin: byte 24: layout edge out of order"), std::string::npos) << r.status().message();
+
+  e = synthetic(8);
+  e.hierarchy.levels[0][0].hi[0] = Q32::from_int(-100);  // a box that no longer holds its particles
+  ASSERT_TRUE(r1::write_epoch(e, d / "b").is_ok());
+  r = r1::read_epoch(d / "b");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("hierarchy.bin: "), std::string::npos) << r.status().message();
 }
 
 TEST(EpochIo, ReplacesAnEpochButNeverOtherDirectories) {

@@ -68,6 +68,10 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   }
   e.links = graph.links;
   e.components = graph.component_size.size();
+  // The pairs the renderer draws: the upper triangle of A_sym, rows ascending, columns ascending.
+  for (std::uint32_t i = 0; i < graph.n; ++i)
+    for (std::uint64_t k = graph.row_ptr[i]; k < graph.row_ptr[i + 1]; ++k)
+      if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
   e.trikernel = o.trikernel;
   e.spectral_params = o.spectral;
 

@@ -1,4 +1,5 @@
-// The canonical little-endian bytes of a hierarchy and its topology digest (R1-HIER-050..051).
+// The canonical little-endian bytes of a hierarchy, their parser and the topology digest
+// (R1-HIER-050..052).
 #include "r1/reference/hierarchy.hpp"
 
 namespace r1 {
@@ -45,6 +46,93 @@ std::string hierarchy_bytes(const Hierarchy& h) {
   for (const auto& of : h.cluster_of)
     for (const std::uint32_t c : of) put_u32(out, c);
   return out;
+}
+
+namespace {
+
+// Reads the fields of R1-HIER-050 in order; every read is bounds-checked.
+class ByteReader {
+ public:
+  ByteReader(std::string_view b, const std::string& name) : b_(b), name_(name) {}
+  bool u8(std::uint8_t& v) { return take(1, [&](const unsigned char* p) { v = p[0]; }); }
+  bool u32(std::uint32_t& v) {
+    return take(4, [&](const unsigned char* p) {
+      v = 0;
+      for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(p[i]) << (8 * i);
+    });
+  }
+  bool i64(std::int64_t& v) {
+    return take(8, [&](const unsigned char* p) {
+      std::uint64_t u = 0;
+      for (int i = 0; i < 8; ++i) u |= static_cast<std::uint64_t>(p[i]) << (8 * i);
+      v = static_cast<std::int64_t>(u);
+    });
+  }
+  std::size_t offset() const { return at_; }
+  std::size_t left() const { return b_.size() - at_; }
+  Status error(const std::string& why) const { return Status::input(name_ + ": byte " + std::to_string(at_) + ": " + why); }
+
+ private:
+  template <class F>
+  bool take(std::size_t k, F f) {
+    if (b_.size() - at_ < k) return false;
+    f(reinterpret_cast<const unsigned char*>(b_.data() + at_));
+    at_ += k;
+    return true;
+  }
+  std::string_view b_;
+  std::string name_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+Result<Hierarchy> parse_hierarchy_bytes(std::string_view bytes, const std::string& name) {
+  ByteReader r(bytes, name);
+  const auto truncated = [&] { return r.error("truncated hierarchy"); };
+  if (bytes.substr(0, 8) != "R1HIER01") return r.error("not an r1 hierarchy (expected R1HIER01)");
+  ByteReader body(bytes.substr(8), name);
+  std::uint32_t n = 0, levels = 0;
+  if (!body.u32(n) || !body.u32(levels)) return truncated();
+  if (levels != kLevels) return r.error("hierarchy has " + std::to_string(levels) + " levels, r1 reads 4");
+  Hierarchy h;
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    std::uint32_t count = 0;
+    if (!body.i64(h.radius_raw[l]) || !body.u32(count)) return truncated();
+    // Each node takes at least 61 bytes: a count beyond what is left is corrupt, not a reason to allocate.
+    if (count > body.left() / 61) return truncated();
+    h.levels[l].resize(count);
+    for (std::uint32_t id = 0; id < count; ++id) {
+      ClusterNode& node = h.levels[l][id];
+      node.level = static_cast<std::uint32_t>(l);
+      node.id = id;
+      std::uint8_t children = 0;
+      if (!body.u32(node.parent) || !body.u32(node.particles) || !body.i64(node.phi_raw)) return truncated();
+      for (Q32& v : node.lo)
+        if (!body.i64(v.raw)) return truncated();
+      for (Q32& v : node.hi)
+        if (!body.i64(v.raw)) return truncated();
+      for (std::uint8_t& c : node.color)
+        if (!body.u8(c)) return truncated();
+      if (!body.u8(children)) return truncated();
+      node.children.resize(children);
+      for (std::uint32_t& c : node.children)
+        if (!body.u32(c)) return truncated();
+    }
+  }
+  if (body.left() != static_cast<std::size_t>(n) * kLevels * 4)
+    return Status::input(name + ": " + std::to_string(bytes.size()) + " bytes do not end with " + std::to_string(n) +
+                         " cluster ids per level");
+  for (auto& of : h.cluster_of) {
+    of.resize(n);
+    for (std::uint32_t& c : of) body.u32(c);
+  }
+  // tau0 as build_hierarchy reports it (R1-HIER-022): radius_raw[0] is r0 itself (the rounded
+  // square root of r0^2), so r0^2 / 2^66 is the same double.
+  if (h.radius_raw[0] < 0) return Status::input(name + ": negative clustering radius");
+  const u128 r0sq = static_cast<u128>(h.radius_raw[0]) * static_cast<u128>(h.radius_raw[0]);
+  h.tau0 = static_cast<double>(r0sq) * 0x1p-66;
+  return h;
 }
 
 hemera::Digest hierarchy_digest(const Hierarchy& h) { return hemera::hash(hierarchy_bytes(h)); }

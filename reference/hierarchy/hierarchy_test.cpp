@@ -543,6 +543,29 @@ TEST(HierarchyBytes, LayoutOfOneParticle) {
   EXPECT_EQ(r1::hierarchy_digest(h), r1::hemera::hash(b));
 }
 
+// R1-HIER-052: the bytes read back to the same hierarchy, and every damaged prefix is a clean error.
+TEST(HierarchyBytes, ParseRoundTripsAndRefusesTruncation) {
+  const Layout L = make_layout(Shape::kBlobs, 300, 5);
+  const Hierarchy h = build_ok(L);
+  const std::string b = r1::hierarchy_bytes(h);
+  auto back = r1::parse_hierarchy_bytes(b, "h.bin");
+  ASSERT_TRUE(back.is_ok()) << back.status().message();
+  EXPECT_EQ(r1::hierarchy_bytes(*back), b);
+  EXPECT_EQ(back->tau0, h.tau0);
+  for (std::size_t l = 0; l < r1::kLevels; ++l)
+    for (std::size_t id = 0; id < h.levels[l].size(); ++id) {
+      EXPECT_EQ(back->levels[l][id].level, l);
+      EXPECT_EQ(back->levels[l][id].id, id);
+    }
+  for (std::size_t cut = 0; cut < b.size(); cut += 1 + cut / 7) {
+    auto r = r1::parse_hierarchy_bytes(b.substr(0, cut), "h.bin");
+    ASSERT_FALSE(r.is_ok()) << cut;
+    EXPECT_EQ(r.status().kind(), r1::ErrorKind::kInput);
+    EXPECT_EQ(r.status().message().rfind("h.bin: ", 0), 0u) << r.status().message();
+  }
+  EXPECT_FALSE(r1::parse_hierarchy_bytes(b + "x", "h.bin").is_ok());
+}
+
 TEST(HierarchyCheck, DetectsEachKindOfDamage) {
   const Layout L = make_layout(Shape::kBlobs, 800, 2);
   const Hierarchy good = build_ok(L);

@@ -7,6 +7,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "r1/fixedpoint/hemera.hpp"
@@ -37,6 +38,11 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
 // digest (R1-HIER-051) that 12.1 requires to be bit-identical across implementations.
 std::string hierarchy_bytes(const Hierarchy& h);
 hemera::Digest hierarchy_digest(const Hierarchy& h);
+
+// Reads bytes written by hierarchy_bytes (R1-HIER-052): every field bounds-checked, a malformed
+// or truncated input is an input error naming `name` and the byte offset. The structure is not
+// validated against particle data here: check_hierarchy does that.
+Result<Hierarchy> parse_hierarchy_bytes(std::string_view bytes, const std::string& name);
 
 // Clusters per level, finest first.
 std::array<std::size_t, kLevels> hierarchy_counts(const Hierarchy& h);

@@ -128,6 +128,16 @@ struct Hierarchy {
 
 namespace r1 {
 
+// One undirected pair of the layout graph (R1-EPO-011 edges.bin): the edges the renderer draws
+// (R-1.0 8). p < q; w_raw is A_sym(p, q) in Q32 (in (0, 1]); a2_raw is A2(p, q) in Q32, the
+// bivector oriented p -> q (|a2| <= w).
+struct LayoutEdge {
+  std::uint32_t p = 0, q = 0;
+  std::int64_t w_raw = 0;
+  std::int64_t a2_raw = 0;
+  bool operator==(const LayoutEdge&) const = default;
+};
+
 struct StageTiming {
   std::string stage;
   double seconds = 0;
@@ -149,6 +159,7 @@ struct Epoch {
   Frame frame;
   Encoding encoding;
   Hierarchy hierarchy;
+  std::vector<LayoutEdge> edges;           // layout graph pairs, by (p, q) ascending
   std::vector<StageTiming> timings;
 };
 

@@ -1,0 +1,160 @@
+// r1 render EPOCH_DIR [--view FILE | --orbit K | --eye X Y Z --target X Y Z] -o OUT.png|OUT.exr:
+// the reference frame renderer (spec/render.md R1-RND-090..094).
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.hpp"
+#include "progress.hpp"
+#include "r1/reference/atomic_file.hpp"
+#include "r1/reference/epoch_io.hpp"
+#include "render/renderer.hpp"
+#include "timing.hpp"
+
+namespace r1::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RenderCliOptions {
+  std::string dir, out, view_file, size, write_view;
+  int orbit = 0;
+  std::vector<double> eye, target, up;
+  double fov = 0, time = 0, distance = 0;
+  bool no_edges = false, no_labels = false, no_field = false, quiet = false;
+};
+
+Status parse_size(const std::string& text, render::View& v) {
+  const auto x = text.find('x');
+  int w = 0, h = 0;
+  const char* end = text.data() + text.size();
+  if (x == std::string::npos || std::from_chars(text.data(), text.data() + x, w).ptr != text.data() + x ||
+      std::from_chars(text.data() + x + 1, end, h).ptr != end || w < 1 || h < 1 || w > 16384 || h > 16384)
+    return Status::input("render: --size must be WIDTHxHEIGHT, each 1..16384 (e.g. 1920x1080)");
+  v.width = w, v.height = h;
+  return Status::ok();
+}
+
+// OUT for one view; OUT-000.EXT, OUT-001.EXT ... for an orbit (R1-RND-091).
+fs::path frame_path(const fs::path& out, int k, int count) {
+  if (count <= 1) return out;
+  char index[16];
+  std::snprintf(index, sizeof index, "-%03d", k);
+  return out.parent_path() / (out.stem().string() + index + out.extension().string());
+}
+
+void print_stats(const fs::path& path, const render::View& v, const render::FrameStats& st) {
+  std::printf("%s  %dx%d  visible %llu (T0 %llu, T1 %llu, T2 %llu, T3 %llu, Tinf %llu), edges %llu of %llu, splats %llu, labels %llu\n",
+              path.string().c_str(), v.width, v.height, static_cast<unsigned long long>(st.visible),
+              static_cast<unsigned long long>(st.tier_count[0]), static_cast<unsigned long long>(st.tier_count[1]),
+              static_cast<unsigned long long>(st.tier_count[2]), static_cast<unsigned long long>(st.tier_count[3]),
+              static_cast<unsigned long long>(st.tier_count[4]), static_cast<unsigned long long>(st.edges_drawn),
+              static_cast<unsigned long long>(st.edges_considered), static_cast<unsigned long long>(st.splats),
+              static_cast<unsigned long long>(st.labels));
+  std::printf("  time %.2f s: cull %.3f, T1/T2 impostors %.2f, edges %.2f, T3 splats %.2f, Tinf field %.2f, labels %.3f\n", st.total_s,
+              st.cull_s, st.impostor_s, st.edge_s, st.splat_s, st.field_s, st.label_s);
+}
+
+Status run_render(const RenderCliOptions& c) {
+  if (c.out.empty()) return Status::input("render: say where to write the image (-o OUT.png or OUT.exr)");
+  const std::string ext = fs::path(c.out).extension().string();
+  if (ext != ".png" && ext != ".exr" && ext != ".PNG" && ext != ".EXR")
+    return Status::input(c.out + ": unsupported image extension (use .png or .exr)");
+  const int forms = (c.view_file.empty() ? 0 : 1) + (c.orbit > 0 ? 1 : 0) + (c.eye.empty() && c.target.empty() ? 0 : 1);
+  if (forms > 1) return Status::input("render: give one of --view, --orbit and --eye/--target");
+  if (c.orbit < 0 || c.orbit > 360) return Status::input("render: --orbit K needs 1 <= K <= 360");
+  if (c.eye.empty() != c.target.empty()) return Status::input("render: --eye and --target go together");
+  if (!(c.distance >= 0 && c.distance <= 1e7)) return Status::input("render: --distance must lie in [0, 1e7] scene units");
+
+  ProgressLine progress;
+  const auto t0 = std::chrono::steady_clock::now();
+  R1_ASSIGN(const Epoch e, read_epoch(c.dir));
+  if (e.ids.empty()) return Status::input(c.dir + ": the epoch has no particles");
+  const render::Scene scene = render::make_scene(e);
+
+  render::View base;
+  if (!c.view_file.empty()) {
+    R1_ASSIGN(base, render::read_view_file(c.view_file));
+  }
+  if (!c.size.empty()) R1_TRY(parse_size(c.size, base));
+  if (c.fov != 0) base.camera.fov_deg = c.fov;
+  if (c.time != 0) base.time = c.time;
+  if (c.no_edges) base.edges = false;
+  if (c.no_labels) base.labels = false;
+  if (c.no_field) base.field = false;
+  std::vector<render::View> views;
+  // R1-RND-007: the default orbit radius fits the whole scene (every particle's bounding sphere
+  // seen from the focus centroid) into the vertical field of view, with 5% margin.
+  double fit = 1;
+  for (std::uint32_t p = 0; p < scene.n; ++p) fit = std::max(fit, render::length(scene.position[p] - scene.centroid) + scene.radius[p]);
+  const double distance = c.distance > 0 ? c.distance : 1.05 * fit / std::sin(base.camera.fov_deg * 3.14159265358979323846 / 360.0);
+  if (!c.eye.empty()) {
+    render::View v = base;
+    const render::Vec3 up = c.up.empty() ? render::Vec3{0, 0, 1} : render::Vec3{c.up[0], c.up[1], c.up[2]};
+    v.camera.position = {c.eye[0], c.eye[1], c.eye[2]};
+    R1_ASSIGN(v.camera.orientation, render::look_at(v.camera.position, {c.target[0], c.target[1], c.target[2]}, up));
+    views.push_back(v);
+  } else if (!c.view_file.empty()) {
+    views.push_back(base);
+  } else {
+    // R1-RND-007: the default is the first orbit view.
+    views = render::orbit_views(base, scene.centroid, distance, std::max(c.orbit, 1));
+  }
+  for (auto& v : views) R1_TRY(render::validate_view(v, "render"));
+  if (!c.write_view.empty()) R1_TRY(write_file_atomic(c.write_view, render::view_toml(views.front())));
+
+  // Render every view first, then write: a failed frame leaves no images behind (R1-ERR-003).
+  std::vector<render::Image> images;
+  std::vector<render::FrameStats> stats;
+  const auto sink = progress.sink();
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const std::string stage = views.size() > 1 ? "render view " + std::to_string(k + 1) + "/" + std::to_string(views.size()) : "render";
+    render::FrameStats st;
+    const ProgressFn rows = [&](std::string_view, std::uint64_t d, std::uint64_t t) {
+      if (sink) sink(stage, d, t);
+    };
+    R1_ASSIGN(render::Image img, render::render_frame(scene, views[k], {}, &st, rows));
+    images.push_back(std::move(img));
+    stats.push_back(st);
+  }
+  progress.finish();
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const fs::path path = frame_path(c.out, static_cast<int>(k), static_cast<int>(views.size()));
+    const auto& bg = views[k].background;
+    R1_TRY(render::write_image(images[k], path,
+                               {render::srgb8_to_linear(bg[0]), render::srgb8_to_linear(bg[1]), render::srgb8_to_linear(bg[2])}));
+    if (!c.quiet) print_stats(path, views[k], stats[k]);
+  }
+  if (!c.quiet) std::printf("%zu image%s in %.2f s\n", views.size(), views.size() == 1 ? "" : "s", seconds_since(t0));
+  return Status::ok();
+}
+
+}  // namespace
+
+void add_render(CLI::App& app, Runner& selected) {
+  auto c = std::make_shared<RenderCliOptions>();
+  auto* cmd = app.add_subcommand("render", "render views of an epoch (reference renderer: impostors, splats, field, edges)");
+  cmd->add_option("EPOCH_DIR", c->dir, "epoch directory written by r1 epoch")->required();
+  cmd->add_option("-o,--out", c->out, "output image: .png (display sRGB) or .exr (scene-linear float)");
+  cmd->add_option("--view", c->view_file, "view file (TOML: [camera] [image] [tiers] [render])");
+  cmd->add_option("--orbit", c->orbit, "K views on a circle around the scene: OUT-000.png ...");
+  cmd->add_option("--distance", c->distance, "orbit radius in scene units (default: the whole scene fits)");
+  cmd->add_option("--eye", c->eye, "camera position X Y Z (with --target)")->expected(3);
+  cmd->add_option("--target", c->target, "point the camera looks at X Y Z")->expected(3);
+  cmd->add_option("--up", c->up, "up direction X Y Z for --eye/--target (0 0 1)")->expected(3);
+  cmd->add_option("--fov", c->fov, "vertical field of view in degrees, 30..110 (50)");
+  cmd->add_option("--size", c->size, "image size WIDTHxHEIGHT (1280x720)");
+  cmd->add_option("--time", c->time, "seconds, for the edge flow animation (0)");
+  cmd->add_option("--write-view", c->write_view, "also write the (first) view used as a view file");
+  cmd->add_flag("--no-edges", c->no_edges, "draw no edges");
+  cmd->add_flag("--no-labels", c->no_labels, "draw no T1 labels");
+  cmd->add_flag("--no-field", c->no_field, "no T-infinity field (sub-pixel particles vanish)");
+  cmd->add_flag("-q,--quiet", c->quiet, "no summary");
+  cmd->callback([c, &selected] { selected = [c] { return run_render(*c); }; });
+}
+
+}  // namespace r1::cli

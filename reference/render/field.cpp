@@ -1,0 +1,232 @@
+// The T-infinity ground-truth field and its ray march (R1-RND-050..058).
+#include "field.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace r1::render {
+
+namespace {
+
+double box_distance2(const Vec3& x, const Vec3& lo, const Vec3& hi) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double v = x[k] < lo[k] ? lo[k] - x[k] : (x[k] > hi[k] ? x[k] - hi[k] : 0.0);
+    d2 += v * v;
+  }
+  return d2;
+}
+
+// Ray against a box grown by g: the parameter interval inside it, or empty (t0 > t1).
+void slab(const Ray& r, const Vec3& lo, const Vec3& hi, double g, double& t0, double& t1) {
+  for (int k = 0; k < 3; ++k) {
+    const double o = r.o[k], d = r.d[k], a = lo[k] - g, b = hi[k] + g;
+    if (d == 0) {
+      if (o < a || o > b) t0 = 1, t1 = 0;
+      continue;
+    }
+    double ta = (a - o) / d, tb = (b - o) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+}
+
+struct Accumulator {
+  double w = 0;
+  Vec3 c, f;
+  void add(double weight, const Vec3& center, const Vec3& color, const Vec3& x, double inv2s2) {
+    const Vec3 d = center - x;
+    const double k = weight * std::exp(-dot(d, d) * inv2s2);
+    w += k;
+    c += color * k;
+    f += d * k;
+  }
+  FieldValue value(double kappa, double sigma) const {
+    FieldValue v;
+    v.weight = w;
+    v.density = kappa / sigma * w;
+    if (w > 0) {
+      v.color = c / w;
+      v.flow = f / w;
+    }
+    return v;
+  }
+};
+
+}  // namespace
+
+static std::uint64_t mix64(std::uint64_t z) {
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+double uniform01(std::uint64_t seed, std::uint64_t item, std::uint64_t dimension) {
+  // SplitMix64 finaliser over a mix of the three counters: a pure function, no shared state.
+  const std::uint64_t h = mix64(mix64(mix64(seed) ^ item) ^ dimension);
+  return static_cast<double>(h >> 11) * 0x1p-53;
+}
+
+double tinf_weight(double s, const Tiers& t) {
+  if (s <= t.t3 - t.band) return 1;
+  if (s >= t.t3 + t.band || t.band <= 0) return 0;
+  return (t.t3 + t.band - s) / (2 * t.band);
+}
+
+FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f, const FieldParams& p) {
+  FieldFrame ff;
+  ff.scene = &s;
+  ff.params = p;
+  ff.focal_px = f.focal_px;
+  ff.weight.resize(s.n);
+  const double n = s.n;
+  for (std::uint32_t i = 0; i < s.n; ++i) {
+    const double depth = dot(s.position[i] - v.camera.position, f.forward);
+    const double sz = depth > s.radius[i] + kNear ? screen_diameter(s.radius[i], depth, f) : 1e300;
+    ff.weight[i] = tinf_weight(sz, v.tiers) * n * s.phi[i];
+  }
+  for (int l = 0; l < kLevels; ++l) {
+    const auto& level = s.hierarchy->levels[static_cast<std::size_t>(l)];
+    auto& whole = ff.whole[static_cast<std::size_t>(l)];
+    auto& nw = ff.node_weight[static_cast<std::size_t>(l)];
+    whole.assign(level.size(), 1);
+    nw.assign(level.size(), 0.0);
+    for (std::size_t id = 0; id < level.size(); ++id)
+      for (std::uint32_t c : level[id].children) {
+        if (l == 0 ? ff.weight[c] != n * s.phi[c] : !ff.whole[static_cast<std::size_t>(l - 1)][c]) whole[id] = 0;
+        nw[id] += l == 0 ? ff.weight[c] : ff.node_weight[static_cast<std::size_t>(l - 1)][c];
+      }
+  }
+  const double dist = length(v.camera.position - s.centroid);
+  const double g = 1.0 + dist / static_cast<double>(kSceneRadius);
+  ff.tau_cam = s.tau0 * g * g;
+  double far = 0;
+  for (const NodeData& d : s.nodes[kLevels - 1])
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner{c & 1 ? d.hi.x : d.lo.x, c & 2 ? d.hi.y : d.lo.y, c & 4 ? d.hi.z : d.lo.z};
+      far = std::max(far, length(corner - v.camera.position));
+    }
+  ff.t_far = std::max(far, 1.0);
+  // Grow by the widest kernel at that distance so the tails of the farthest particles are inside.
+  ff.t_far += p.cutoff * field_sigma(ff, ff.t_far);
+  return ff;
+}
+
+double field_sigma(const FieldFrame& ff, double t) {
+  const double tau = ff.tau_cam * std::max(t, 0.0) / ff.t_far;
+  return std::max(std::sqrt(tau), 0.5 * std::max(t, 0.0) / ff.focal_px + 1e-9);
+}
+
+FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {
+  const Scene& s = *ff.scene;
+  Accumulator acc;
+  const double inv = 1.0 / (2 * sigma * sigma);
+  for (std::uint32_t p = 0; p < s.n; ++p)
+    if (ff.weight[p] > 0) acc.add(ff.weight[p], s.position[p], s.color[p], x, inv);
+  return acc.value(ff.params.kappa, sigma);
+}
+
+FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma) {
+  const Scene& s = *ff.scene;
+  Accumulator acc;
+  const double inv = 1.0 / (2 * sigma * sigma);
+  const double reach2 = ff.params.cutoff * sigma * ff.params.cutoff * sigma;
+  std::vector<std::pair<int, std::uint32_t>> stack;
+  for (std::uint32_t id = 0; id < s.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
+  while (!stack.empty()) {
+    const auto [l, id] = stack.back();
+    stack.pop_back();
+    const NodeData& d = s.nodes[static_cast<std::size_t>(l)][id];
+    if (ff.node_weight[static_cast<std::size_t>(l)][id] <= 0 || box_distance2(x, d.lo, d.hi) > reach2) continue;
+    if (ff.whole[static_cast<std::size_t>(l)][id] && d.extent <= ff.params.theta * sigma) {
+      acc.add(d.weight, d.centroid, d.color, x, inv);
+      continue;
+    }
+    for (std::uint32_t c : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children) {
+      if (l == 0) {
+        if (ff.weight[c] > 0) acc.add(ff.weight[c], s.position[c], s.color[c], x, inv);
+      } else {
+        stack.push_back({l - 1, c});
+      }
+    }
+  }
+  return acc.value(ff.params.kappa, sigma);
+}
+
+double field_error_bound(const FieldFrame& ff, double sigma) {
+  double total = 0;
+  for (double w : ff.weight) total += w;
+  const double per_weight = 0.5 * ff.params.theta * ff.params.theta + std::exp(-0.5 * ff.params.cutoff * ff.params.cutoff);
+  return ff.params.kappa / sigma * total * per_weight;
+}
+
+void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64_t pixel, std::vector<FieldSample>& out,
+                 FieldRayStats* stats) {
+  out.clear();
+  const Scene& s = *ff.scene;
+  const FieldParams& p = ff.params;
+  const double t_end = std::min(t_max, ff.t_far);
+  if (!(t_end > kNear)) return;
+  const double grow = p.cutoff * field_sigma(ff, t_end);
+  // Candidates: nodes whose box grown by the widest kernel on this ray meets the ray (R1-RND-057).
+  struct Candidate {
+    int level;
+    std::uint32_t id;
+    bool aggregate;
+    double t0, t1;
+  };
+  std::vector<Candidate> cands;
+  std::vector<std::pair<int, std::uint32_t>> stack;
+  for (std::uint32_t id = 0; id < s.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
+  double a = t_end, b = kNear;
+  while (!stack.empty()) {
+    const auto [l, id] = stack.back();
+    stack.pop_back();
+    const NodeData& d = s.nodes[static_cast<std::size_t>(l)][id];
+    if (ff.node_weight[static_cast<std::size_t>(l)][id] <= 0) continue;  // nothing of it is in the field this frame
+    double t0 = kNear, t1 = t_end;
+    slab(ray, d.lo, d.hi, grow, t0, t1);
+    if (t0 > t1) continue;
+    const bool aggregate = ff.whole[static_cast<std::size_t>(l)][id] && d.extent <= p.theta * field_sigma(ff, t0);
+    if (aggregate || l == 0) {
+      cands.push_back({l, id, aggregate, t0, t1});
+      a = std::min(a, t0);
+      b = std::max(b, t1);
+      continue;
+    }
+    for (std::uint32_t c : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children) stack.push_back({l - 1, c});
+  }
+  if (stats) stats->candidates += cands.size();
+  if (cands.empty() || !(b > a)) return;
+  const double delta = (b - a) / p.samples;
+  double transmittance = 1;
+  for (int i = 0; i < p.samples && transmittance >= p.stop; ++i) {
+    const double t = a + (i + uniform01(s.seed, pixel, static_cast<std::uint64_t>(i))) * delta;
+    const double sigma = field_sigma(ff, t);
+    const double inv = 1.0 / (2 * sigma * sigma);
+    const double reach2 = p.cutoff * sigma * p.cutoff * sigma;
+    const Vec3 x = ray.at(t);
+    Accumulator acc;
+    for (const Candidate& c : cands) {
+      if (t < c.t0 || t > c.t1) continue;
+      const NodeData& d = s.nodes[static_cast<std::size_t>(c.level)][c.id];
+      if (box_distance2(x, d.lo, d.hi) > reach2) continue;
+      if (stats) ++stats->evaluations;
+      if (c.aggregate) {
+        acc.add(d.weight, d.centroid, d.color, x, inv);
+        continue;
+      }
+      for (std::uint32_t q : s.hierarchy->levels[0][c.id].children)
+        if (ff.weight[q] > 0) acc.add(ff.weight[q], s.position[q], s.color[q], x, inv);
+    }
+    if (acc.w <= 0) continue;
+    const FieldValue v = acc.value(p.kappa, sigma);
+    const double alpha = 1.0 - std::exp(-v.density * delta);
+    out.push_back({t, alpha, v.color, v.flow});
+    transmittance *= 1.0 - alpha;
+  }
+}
+
+}  // namespace r1::render

@@ -1,0 +1,60 @@
+// The frame buffer and its outputs (R-1.0 decision 10, spec/render.md R1-RND-080..086): linear
+// light with sRGB/Rec.709 primaries, written as scene-linear float EXR or as a display-referred
+// sRGB PNG through OpenColorIO after a documented tone map. Writes are atomic (R1-ERR-003).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "r1/spec/status.hpp"
+
+namespace r1::render {
+
+// Premultiplied linear RGBA, row-major from the top-left pixel, plus an optional 3-channel flow
+// buffer (R-1.0 7.2: the T-infinity flow composited in a separate channel).
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgba;  // 4 * width * height
+  std::vector<float> flow;  // empty or 3 * width * height
+  std::vector<double> depth;  // renderer only: ray distance of the nearest opaque hit (inf: none); not written
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), rgba(static_cast<std::size_t>(w) * h * 4, 0.0f) {}
+  float* px(int x, int y) { return rgba.data() + (static_cast<std::size_t>(y) * width + x) * 4; }
+  const float* px(int x, int y) const { return rgba.data() + (static_cast<std::size_t>(y) * width + x) * 4; }
+};
+
+// Display sRGB code value (0..255) -> linear light, the exact IEC 61966-2-1 curve.
+float srgb8_to_linear(std::uint8_t v);
+
+// The tone map for display (R1-RND-082): linear values above display white roll off smoothly.
+// Applied to the colour's largest channel, so hue is kept. Identity below the knee.
+std::array<float, 3> tone_map(std::array<float, 3> rgb);
+
+// The tone map's constants (R1-RND-082): identity up to the knee, asymptote 1 (display white).
+inline constexpr double kToneKnee = 0.8;
+
+// The OpenColorIO step of display_srgb8 alone (R1-RND-083): scene-linear Rec.709 RGB triples ->
+// sRGB display-encoded values, in place; no tone map, no quantization. Exposed so tests can hold
+// OCIO's transform against the closed-form IEC 61966-2-1 encode.
+Status ocio_linear_to_srgb(std::span<float> rgb);
+
+// Linear premultiplied RGBA over `background` (linear RGB) -> 8-bit display sRGB RGB through
+// OpenColorIO (scene-linear Rec.709 -> sRGB display), row-major, 3 bytes a pixel.
+Result<std::vector<std::uint8_t>> display_srgb8(const Image& image, std::array<float, 3> background);
+
+// Writes `image` by the extension of `path`: .exr (32-bit float RGBA, scene-linear, premultiplied,
+// plus flow.X/Y/Z when present) or .png (display sRGB over `background`). Atomic: the file
+// appears complete or not at all. Another extension is an input error.
+Status write_image(const Image& image, const std::filesystem::path& path, std::array<float, 3> background);
+
+// Draws `text` in linear colour `rgb` with its baseline-left at pixel (x, y), `size` pixels high,
+// over the image (OpenImageIO's text renderer). Fails with an error when no font is available.
+Status draw_text(Image& image, int x, int y, std::string_view text, int size, std::array<float, 3> rgb);
+
+}  // namespace r1::render

@@ -1,0 +1,50 @@
+// The render scene (spec/render.md R1-RND-013..016): an epoch converted once to the fp64 values
+// the frame stages use, with per-node aggregates of the hierarchy for culling, the far field and
+// edge bundling.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "r1/spec/epoch.hpp"
+#include "vec3.hpp"
+
+namespace r1::render {
+
+struct NodeData {
+  Vec3 lo, hi;           // AABB of the members' positions
+  Vec3 centroid;         // phi-weighted mean position
+  double extent = 0;     // max distance of a member from the centroid
+  double max_radius = 0; // largest member radius
+  double phi = 0;        // sum of member phi
+  double weight = 0;     // sum of member n * phi (the field's per-particle weight, R1-RND-052)
+  Vec3 color;            // field-weighted mean of the members' linear colour times brightness
+  double radius = 0;     // sqrt(sum of member radius^2): the area-equivalent radius for edges
+};
+
+struct Scene {
+  std::uint32_t n = 0;
+  std::vector<Vec3> position;      // X'(p) in scene units
+  std::vector<double> radius;      // r(p), scene units
+  std::vector<double> phi;         // phi*(p)
+  std::vector<Vec3> color;         // linear light colour (from color.rgb8) times brightness b(p)
+  std::vector<Shape> shape;
+  std::vector<std::string> label;  // title, else the first 8 hex digits of the id
+  std::vector<double> u5;          // for stretched splats
+  std::vector<double> degree;      // weighted degree on the layout graph
+  std::vector<LayoutEdge> edges;
+  std::array<std::vector<NodeData>, kLevels> nodes;
+  const Hierarchy* hierarchy = nullptr;  // ids, children, parents (borrowed from the epoch)
+  Vec3 centroid;                   // phi-weighted centroid of G (R-1.0 9.5)
+  double tau0 = 1;                 // finest heat-kernel scale of the hierarchy, scene units^2
+  double median_radius = 1;
+  std::uint64_t seed = 0;          // counter-based jitter seed: the snapshot digest's first 8 bytes
+};
+
+// b(p) = clamp((n phi / 1)^(1/4), 0.6, 3): brighter particles carry more focus (R1-RND-014).
+double brightness(double n_phi);
+
+Scene make_scene(const Epoch& e);
+
+}  // namespace r1::render

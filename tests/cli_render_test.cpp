@@ -1,0 +1,84 @@
+// r1 render and its outputs through the command line (spec/render.md R1-RND-090..094): identical
+// bytes on a re-render, orbit file names, EXR and PNG, view files, and bad input.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using r1::test::run_cli;
+
+class CliRender : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new r1::test::TempDir;
+    ASSERT_EQ(run_cli({"gen", "sbm", "--sizes", "60,50,40", "-o", (dir_->path() / "g.graph").string()}).exit_code, 0);
+    const auto r = run_cli({"epoch", (dir_->path() / "g.graph").string(), "-q", "-o", (dir_->path() / "e").string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static fs::path epoch() { return dir_->path() / "e"; }
+  static fs::path at(const std::string& name) { return dir_->path() / name; }
+  static r1::test::TempDir* dir_;
+};
+r1::test::TempDir* CliRender::dir_ = nullptr;
+
+TEST_F(CliRender, TwoRendersOfTheSameViewGiveIdenticalBytes) {
+  auto r = run_cli({"render", epoch().string(), "--size", "96x64", "-o", at("a.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("visible 150"), std::string::npos) << r.out;
+  r = run_cli({"render", epoch().string(), "--size", "96x64", "-o", at("b.png").string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r1::test::read_file(at("a.png")), r1::test::read_file(at("b.png")));
+  auto in = OIIO::ImageInput::open(at("a.png").string());
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().width, 96);
+  EXPECT_EQ(in->spec().height, 64);
+}
+
+TEST_F(CliRender, OrbitWritesNumberedFramesAndExrIsSceneLinear) {
+  const auto r = run_cli({"render", epoch().string(), "--orbit", "3", "--size", "48x32", "-q", "-o", at("o.exr").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* name : {"o-000.exr", "o-001.exr", "o-002.exr"}) {
+    auto in = OIIO::ImageInput::open(at(name).string());
+    ASSERT_TRUE(in) << name;
+    EXPECT_EQ(in->spec().format, OIIO::TypeDesc::FLOAT);
+    EXPECT_GE(in->spec().nchannels, 4);
+  }
+  EXPECT_FALSE(fs::exists(at("o.exr")));
+}
+
+TEST_F(CliRender, ViewFilesRoundTripThroughWriteView) {
+  auto r = run_cli({"render", epoch().string(), "--eye", "0", "-50", "2500", "--target", "0", "0", "0", "--size", "40x30", "-q",
+                    "--write-view", at("v.toml").string(), "-o", at("v1.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli({"render", epoch().string(), "--view", at("v.toml").string(), "-q", "-o", at("v2.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r1::test::read_file(at("v1.png")), r1::test::read_file(at("v2.png")));
+}
+
+TEST_F(CliRender, BadInputIsOneLineExitTwoAndWritesNothing) {
+  r1::test::write_file(at("bad.toml"), "[camera]\nfov = 10\n");
+  const std::vector<std::vector<std::string>> cases = {
+      {"render", epoch().string(), "--view", at("bad.toml").string(), "-o", at("x.png").string()},
+      {"render", epoch().string(), "-o", at("x.jpg").string()},
+      {"render", epoch().string(), "--size", "0x10", "-o", at("x.png").string()},
+      {"render", epoch().string(), "--fov", "200", "-o", at("x.png").string()},
+      {"render", epoch().string(), "--orbit", "2", "--eye", "1", "2", "3", "--target", "0", "0", "0", "-o", at("x.png").string()},
+      {"render", epoch().string(), "--eye", "1", "1", "1", "--target", "1", "1", "1", "-o", at("x.png").string()},
+      {"render", at("nothing").string(), "-o", at("x.png").string()},
+      {"render", epoch().string(), "--bogus", "-o", at("x.png").string()},
+  };
+  for (const auto& args : cases) {
+    const auto r = run_cli(args);
+    EXPECT_EQ(r.exit_code, 2) << args[2] << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(at("x.png")));
+  EXPECT_FALSE(fs::exists(at("x.jpg")));
+}
+
+}  // namespace
