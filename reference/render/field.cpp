@@ -87,17 +87,35 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
     const double sz = depth > s.radius[i] + kNear ? screen_diameter(s.radius[i], depth, f) : 1e300;
     ff.weight[i] = tinf_weight(sz, v.tiers) * n * s.phi[i];
   }
-  for (int l = 0; l < kLevels; ++l) {
-    const auto& level = s.hierarchy->levels[static_cast<std::size_t>(l)];
-    auto& whole = ff.whole[static_cast<std::size_t>(l)];
-    auto& nw = ff.node_weight[static_cast<std::size_t>(l)];
-    whole.assign(level.size(), 1);
-    nw.assign(level.size(), 0.0);
-    for (std::size_t id = 0; id < level.size(); ++id)
-      for (std::uint32_t c : level[id].children) {
-        if (l == 0 ? ff.weight[c] != n * s.phi[c] : !ff.whole[static_cast<std::size_t>(l - 1)][c]) whole[id] = 0;
-        nw[id] += l == 0 ? ff.weight[c] : ff.node_weight[static_cast<std::size_t>(l - 1)][c];
+  // Node aggregates over the members in the field this frame (weights, centroid, colour, extent).
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    const std::size_t count = s.hierarchy->levels[l].size();
+    ff.node_weight[l].assign(count, 0.0);
+    ff.node_centroid[l].assign(count, Vec3{});
+    ff.node_color[l].assign(count, Vec3{});
+    ff.node_extent[l].assign(count, 0.0);
+  }
+  for (std::uint32_t i = 0; i < s.n; ++i) {
+    if (!(ff.weight[i] > 0)) continue;
+    for (std::size_t l = 0; l < kLevels; ++l) {
+      const std::uint32_t id = s.hierarchy->cluster_of[l][i];
+      ff.node_weight[l][id] += ff.weight[i];
+      ff.node_centroid[l][id] += s.position[i] * ff.weight[i];
+      ff.node_color[l][id] += s.color[i] * ff.weight[i];
+    }
+  }
+  for (std::size_t l = 0; l < kLevels; ++l)
+    for (std::size_t id = 0; id < ff.node_weight[l].size(); ++id)
+      if (ff.node_weight[l][id] > 0) {
+        ff.node_centroid[l][id] = ff.node_centroid[l][id] / ff.node_weight[l][id];
+        ff.node_color[l][id] = ff.node_color[l][id] / ff.node_weight[l][id];
       }
+  for (std::uint32_t i = 0; i < s.n; ++i) {
+    if (!(ff.weight[i] > 0)) continue;
+    for (std::size_t l = 0; l < kLevels; ++l) {
+      const std::uint32_t id = s.hierarchy->cluster_of[l][i];
+      ff.node_extent[l][id] = std::max(ff.node_extent[l][id], length(s.position[i] - ff.node_centroid[l][id]));
+    }
   }
   const double dist = length(v.camera.position - s.centroid);
   const double g = 1.0 + dist / static_cast<double>(kSceneRadius);
@@ -139,9 +157,10 @@ FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma)
     const auto [l, id] = stack.back();
     stack.pop_back();
     const NodeData& d = s.nodes[static_cast<std::size_t>(l)][id];
-    if (ff.node_weight[static_cast<std::size_t>(l)][id] <= 0 || box_distance2(x, d.lo, d.hi) > reach2) continue;
-    if (ff.whole[static_cast<std::size_t>(l)][id] && d.extent <= ff.params.theta * sigma) {
-      acc.add(d.weight, d.centroid, d.color, x, inv);
+    const auto L = static_cast<std::size_t>(l);
+    if (ff.node_weight[L][id] <= 0 || box_distance2(x, d.lo, d.hi) > reach2) continue;
+    if (ff.node_extent[L][id] <= ff.params.theta * sigma) {
+      acc.add(ff.node_weight[L][id], ff.node_centroid[L][id], ff.node_color[L][id], x, inv);
       continue;
     }
     for (std::uint32_t c : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children) {
@@ -189,7 +208,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     double t0 = kNear, t1 = t_end;
     slab(ray, d.lo, d.hi, grow, t0, t1);
     if (t0 > t1) continue;
-    const bool aggregate = ff.whole[static_cast<std::size_t>(l)][id] && d.extent <= p.theta * field_sigma(ff, t0);
+    const bool aggregate = ff.node_extent[static_cast<std::size_t>(l)][id] <= p.theta * field_sigma(ff, t0);
     if (aggregate || l == 0) {
       cands.push_back({l, id, aggregate, t0, t1});
       a = std::min(a, t0);
@@ -215,7 +234,8 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
       if (box_distance2(x, d.lo, d.hi) > reach2) continue;
       if (stats) ++stats->evaluations;
       if (c.aggregate) {
-        acc.add(d.weight, d.centroid, d.color, x, inv);
+        acc.add(ff.node_weight[static_cast<std::size_t>(c.level)][c.id], ff.node_centroid[static_cast<std::size_t>(c.level)][c.id],
+                ff.node_color[static_cast<std::size_t>(c.level)][c.id], x, inv);
         continue;
       }
       for (std::uint32_t q : s.hierarchy->levels[0][c.id].children)

@@ -32,8 +32,11 @@ struct FieldValue {
 struct FieldFrame {
   const Scene* scene = nullptr;
   std::vector<double> weight;                            // per particle
-  std::array<std::vector<std::uint8_t>, kLevels> whole;  // per node: all members weight 1
-  std::array<std::vector<double>, kLevels> node_weight;  // per node: sum of its members' weights (0: skip it)
+  // Per node, over its members with field weight > 0 this frame (R1-RND-054): the weight sum (0:
+  // skip the node), their weighted centroid and colour, and their largest distance from it.
+  std::array<std::vector<double>, kLevels> node_weight;
+  std::array<std::vector<Vec3>, kLevels> node_centroid, node_color;
+  std::array<std::vector<double>, kLevels> node_extent;
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   double focal_px = 1;
