@@ -61,9 +61,7 @@ void print_stats(const fs::path& path, const render::View& v, const render::Fram
 
 Status run_render(const RenderCliOptions& c) {
   if (c.out.empty()) return Status::input("render: say where to write the image (-o OUT.png or OUT.exr)");
-  const std::string ext = fs::path(c.out).extension().string();
-  if (ext != ".png" && ext != ".exr" && ext != ".PNG" && ext != ".EXR")
-    return Status::input(c.out + ": unsupported image extension (use .png or .exr)");
+  R1_TRY(render::check_image_extension(c.out));
   const int forms = (c.view_file.empty() ? 0 : 1) + (c.orbit > 0 ? 1 : 0) + (c.eye.empty() && c.target.empty() ? 0 : 1);
   if (forms > 1) return Status::input("render: give one of --view, --orbit and --eye/--target");
   if (c.orbit < 0 || c.orbit > 360) return Status::input("render: --orbit K needs 1 <= K <= 360");
@@ -91,7 +89,7 @@ Status run_render(const RenderCliOptions& c) {
   // seen from the focus centroid) into the vertical field of view, with 5% margin.
   double fit = 1;
   for (std::uint32_t p = 0; p < scene.n; ++p) fit = std::max(fit, render::length(scene.position[p] - scene.centroid) + scene.radius[p]);
-  const double distance = c.distance > 0 ? c.distance : 1.05 * fit / std::sin(base.camera.fov_deg * 3.14159265358979323846 / 360.0);
+  const double distance = c.distance > 0 ? c.distance : 1.05 * fit / std::sin(base.camera.fov_deg * render::kPi / 360.0);
   if (!c.eye.empty()) {
     render::View v = base;
     const render::Vec3 up = c.up.empty() ? render::Vec3{0, 0, 1} : render::Vec3{c.up[0], c.up[1], c.up[2]};

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "r1/fixedpoint/counter_rng.hpp"
+
 namespace r1::render {
 
 namespace {
@@ -55,19 +57,6 @@ struct Accumulator {
 };
 
 }  // namespace
-
-static std::uint64_t mix64(std::uint64_t z) {
-  z += 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-double uniform01(std::uint64_t seed, std::uint64_t item, std::uint64_t dimension) {
-  // SplitMix64 finaliser over a mix of the three counters: a pure function, no shared state.
-  const std::uint64_t h = mix64(mix64(mix64(seed) ^ item) ^ dimension);
-  return static_cast<double>(h >> 11) * 0x1p-53;
-}
 
 double tinf_weight(double s, const Tiers& t) {
   if (s <= t.t3 - t.band) return 1;
@@ -222,7 +211,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   const double delta = (b - a) / p.samples;
   double transmittance = 1;
   for (int i = 0; i < p.samples && transmittance >= p.stop; ++i) {
-    const double t = a + (i + uniform01(s.seed, pixel, static_cast<std::uint64_t>(i))) * delta;
+    const double t = a + (i + rng::uniform_double(s.seed, pixel, static_cast<std::uint64_t>(i))) * delta;
     const double sigma = field_sigma(ff, t);
     const double inv = 1.0 / (2 * sigma * sigma);
     const double reach2 = p.cutoff * sigma * p.cutoff * sigma;

@@ -67,11 +67,8 @@ struct FieldRayStats {
 };
 
 // The stratified, jittered march of 7.2 along `ray` up to t_max (an opaque hit), samples
-// written in ray order. `pixel` keys the counter-based jitter (R1-RND-056).
+// written in ray order. `pixel` keys the counter-based jitter (r1::rng::uniform_double, R1-RND-056).
 void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64_t pixel, std::vector<FieldSample>& out,
                  FieldRayStats* stats = nullptr);
-
-// The counter-based uniform in [0, 1) of (seed, item, dimension) (DESIGN decision 11).
-double uniform01(std::uint64_t seed, std::uint64_t item, std::uint64_t dimension);
 
 }  // namespace r1::render

@@ -307,16 +307,16 @@ Result<std::vector<std::uint8_t>> display_srgb8(const Image& image, std::array<f
   return out;
 }
 
-Status write_image(const Image& image, const fs::path& path, std::array<float, 3> background) {
+Status check_image_extension(const fs::path& path) {
   const std::string ext = lower(path.extension().string());
-  Format format;
-  if (ext == ".exr") {
-    format = Format::kExr;
-  } else if (ext == ".png") {
-    format = Format::kPng;
-  } else {
-    return Status::input(path.string() + ": unsupported image extension (use .png or .exr)");
-  }
+  if (ext == ".exr" || ext == ".png") return Status::ok();
+  return Status::input(path.string() + ": unsupported image extension (use .png or .exr)");
+}
+
+Status write_image(const Image& image, const fs::path& path, std::array<float, 3> background) {
+  R1_TRY(check_image_extension(path));
+  const std::string ext = lower(path.extension().string());
+  const Format format = ext == ".exr" ? Format::kExr : Format::kPng;
   if (Status s = check_image(image); !s) return s.with_prefix(path.string() + ": ");
 
   if (format == Format::kPng) {

@@ -48,6 +48,10 @@ Status ocio_linear_to_srgb(std::span<float> rgb);
 // OpenColorIO (scene-linear Rec.709 -> sRGB display), row-major, 3 bytes a pixel.
 Result<std::vector<std::uint8_t>> display_srgb8(const Image& image, std::array<float, 3> background);
 
+// OK when `path` ends in .png or .exr (any case); else the input error write_image returns.
+// Callers check it before the work that produces the image.
+Status check_image_extension(const std::filesystem::path& path);
+
 // Writes `image` by the extension of `path`: .exr (32-bit float RGBA, scene-linear, premultiplied,
 // plus flow.X/Y/Z when present) or .png (display sRGB over `background`). Atomic: the file
 // appears complete or not at all. Another extension is an input error.

@@ -14,7 +14,6 @@ namespace r1::render {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kSplatLowPass = 0.3;        // px^2 added to the projected covariance (Kerbl et al.)
 constexpr double kMinAlpha = 1.0 / 255.0;    // splat contributions below this are dropped
@@ -338,7 +337,11 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   // hit, then the hit (R1-RND-070).
   const FieldFrame ff = make_field_frame(s, v, f, options.field);
   std::vector<FieldSample> samples;
-  std::vector<std::pair<double, std::uint32_t>> hits;
+  struct SplatHit {
+    double t, alpha;
+    std::uint32_t splat;
+  };
+  std::vector<SplatHit> hits;
   FieldRayStats fs;
   bool any_flow = false;
   std::vector<float> flow(static_cast<std::size_t>(W) * H * 3, 0.0f);
@@ -357,19 +360,19 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
       for (std::uint32_t i : tiles[static_cast<std::size_t>(y / kTile) * tiles_x + x / kTile]) {
         const double t = splats[i].depth / cos_fwd;
         if (t >= t_op) continue;
-        if (splat_alpha(splats[i], x + 0.5, y + 0.5) >= kMinAlpha) hits.push_back({t, i});
+        const double a = splat_alpha(splats[i], x + 0.5, y + 0.5);
+        if (a >= kMinAlpha) hits.push_back({t, a, i});
       }
       // Tile lists are in depth order; the ray parameter keeps it (t = depth / cos).
       Vec3 color, fl;
       double T = 1;
       std::size_t i = 0, j = 0;
       while ((i < samples.size() || j < hits.size()) && T > 1e-4) {
-        const bool take_splat = j < hits.size() && (i >= samples.size() || hits[j].first <= samples[i].t);
+        const bool take_splat = j < hits.size() && (i >= samples.size() || hits[j].t <= samples[i].t);
         if (take_splat) {
-          const Splat& sp = splats[hits[j++].second];
-          const double a = splat_alpha(sp, x + 0.5, y + 0.5);
-          color += sp.color * (T * a);
-          T *= 1 - a;
+          const SplatHit& h = hits[j++];
+          color += splats[h.splat].color * (T * h.alpha);
+          T *= 1 - h.alpha;
         } else {
           const FieldSample& fsmp = samples[i++];
           color += fsmp.color * (T * fsmp.alpha);

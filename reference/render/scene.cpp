@@ -63,7 +63,7 @@ Scene make_scene(const Epoch& e) {
       d.lo = {node.lo[0].to_double(), node.lo[1].to_double(), node.lo[2].to_double()};
       d.hi = {node.hi[0].to_double(), node.hi[1].to_double(), node.hi[2].to_double()};
       Vec3 centroid, color;
-      double r2 = 0;
+      double r2 = 0, weight = 0;
       // Member particles of this node: gather through the children.
       std::vector<std::uint32_t> members;
       std::vector<std::uint32_t> frontier = node.children;
@@ -78,14 +78,14 @@ Scene make_scene(const Epoch& e) {
       members = std::move(frontier);
       for (std::uint32_t p : members) {
         d.phi += s.phi[p];
-        d.weight += n * s.phi[p];
+        weight += n * s.phi[p];
         centroid += s.position[p] * s.phi[p];
         color += s.color[p] * (n * s.phi[p]);
         d.max_radius = std::max(d.max_radius, s.radius[p]);
         r2 += s.radius[p] * s.radius[p];
       }
       d.centroid = d.phi > 0 ? centroid / d.phi : (d.lo + d.hi) * 0.5;
-      d.color = d.weight > 0 ? color / d.weight : Vec3{};
+      d.color = weight > 0 ? color / weight : Vec3{};
       d.radius = std::sqrt(r2);
       for (std::uint32_t p : members) d.extent = std::max(d.extent, length(s.position[p] - d.centroid));
     }

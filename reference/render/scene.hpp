@@ -18,8 +18,7 @@ struct NodeData {
   double extent = 0;     // max distance of a member from the centroid
   double max_radius = 0; // largest member radius
   double phi = 0;        // sum of member phi
-  double weight = 0;     // sum of member n * phi (the field's per-particle weight, R1-RND-052)
-  Vec3 color;            // field-weighted mean of the members' linear colour times brightness
+  Vec3 color;            // (n phi)-weighted mean of the members' linear colour times brightness
   double radius = 0;     // sqrt(sum of member radius^2): the area-equivalent radius for edges
 };
 

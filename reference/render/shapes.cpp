@@ -14,7 +14,6 @@ namespace {
 // constexpr in C++20); they scale the shape definitions of shapes.hpp.
 constexpr double kInvSqrt3 = 0.57735026918962576450914878050196;
 constexpr double kInvSqrt2 = 0.70710678118654752440084436210485;
-constexpr double kPi = 3.14159265358979323846264338327950;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Newton steps that polish a root: a handful suffices from a Ferrari/Cardano estimate (quadratic

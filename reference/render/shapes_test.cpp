@@ -24,8 +24,8 @@ using r1::render::kTorusMinor;
 using r1::render::Ray;
 using r1::render::solve_quartic;
 using r1::render::Vec3;
+using r1::render::kPi;
 
-constexpr double kPi = 3.14159265358979323846264338327950;
 const double kSqrt3 = std::sqrt(3.0);
 const double kSqrt2 = std::sqrt(2.0);
 constexpr double kInf = std::numeric_limits<double>::infinity();

@@ -12,8 +12,6 @@ namespace r1::render {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // A decimal given as an integer or as a string "12.5" / "-0.25" (R1-RND-005: the TOML subset of
 // R1-IN-005 has no floats). No exponent, no inf or nan.
 std::optional<double> number_of(const toml::node& n) {
