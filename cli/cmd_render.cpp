@@ -48,15 +48,23 @@ fs::path frame_path(const fs::path& out, int k, int count) {
 }
 
 void print_stats(const fs::path& path, const render::View& v, const render::FrameStats& st) {
-  std::printf("%s  %dx%d  visible %llu (T0 %llu, T1 %llu, T2 %llu, T3 %llu, Tinf %llu), edges %llu of %llu, splats %llu, labels %llu\n",
+  std::printf("%s  %dx%d  visible %llu (T0 %llu, T1 %llu, T2 %llu, T3 %llu, Tinf %llu), edges %llu of %llu (%llu in view), splats %llu, labels %llu\n",
               path.string().c_str(), v.width, v.height, static_cast<unsigned long long>(st.visible),
               static_cast<unsigned long long>(st.tier_count[0]), static_cast<unsigned long long>(st.tier_count[1]),
               static_cast<unsigned long long>(st.tier_count[2]), static_cast<unsigned long long>(st.tier_count[3]),
               static_cast<unsigned long long>(st.tier_count[4]), static_cast<unsigned long long>(st.edges_drawn),
-              static_cast<unsigned long long>(st.edges_considered), static_cast<unsigned long long>(st.splats),
+              static_cast<unsigned long long>(st.edges_considered), static_cast<unsigned long long>(st.edges_in_view),
+              static_cast<unsigned long long>(st.splats),
               static_cast<unsigned long long>(st.labels));
   std::printf("  time %.2f s: cull %.3f, T1/T2 impostors %.2f, edges %.2f, T3 splats %.2f, Tinf field %.2f, labels %.3f\n", st.total_s,
               st.cull_s, st.impostor_s, st.edge_s, st.splat_s, st.field_s, st.label_s);
+  if (st.field_candidates > 0) {
+    const double pixels = static_cast<double>(v.width) * v.height;
+    std::printf("  field per pixel: %.1f nodes tested, %.1f on the ray, %.1f samples, %.0f kernel evaluations\n",
+                static_cast<double>(st.field_walked) / pixels, static_cast<double>(st.field_candidates) / pixels,
+                static_cast<double>(st.field_samples) / pixels,
+                static_cast<double>(st.field_evaluations) / pixels);
+  }
 }
 
 Status run_render(const RenderCliOptions& c) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "r1/fixedpoint/counter_rng.hpp"
 
@@ -10,36 +11,40 @@ namespace r1::render {
 
 namespace {
 
-double box_distance2(const Vec3& x, const Vec3& lo, const Vec3& hi) {
-  double d2 = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double v = x[k] < lo[k] ? lo[k] - x[k] : (x[k] > hi[k] ? x[k] - hi[k] : 0.0);
-    d2 += v * v;
+// The ray parameters where the ray is within r of c (d is unit length), intersected with [t0, t1]
+// (empty: t0 > t1).
+void ray_ball(const Ray& ray, const Vec3& c, double r, double& t0, double& t1) {
+  const Vec3 oc = ray.o - c;
+  const double b = dot(ray.d, oc), disc = b * b - (dot(oc, oc) - r * r);
+  if (disc < 0) {
+    t0 = 1, t1 = 0;
+    return;
   }
-  return d2;
+  const double q = std::sqrt(disc);
+  t0 = std::max(t0, -b - q);
+  t1 = std::min(t1, -b + q);
 }
 
-// Ray against a box grown by g: the parameter interval inside it, or empty (t0 > t1).
-void slab(const Ray& r, const Vec3& lo, const Vec3& hi, double g, double& t0, double& t1) {
-  for (int k = 0; k < 3; ++k) {
-    const double o = r.o[k], d = r.d[k], a = lo[k] - g, b = hi[k] + g;
-    if (d == 0) {
-      if (o < a || o > b) t0 = 1, t1 = 0;
-      continue;
-    }
-    double ta = (a - o) / d, tb = (b - o) / d;
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
+// Whether a node can matter at x: some member with field weight lies within cutoff sigma of x
+// (the members lie within `extent` of the centroid).
+bool within_reach(const Vec3& x, const Vec3& centroid, double extent, double reach) {
+  const Vec3 d = x - centroid;
+  return dot(d, d) <= (extent + reach) * (extent + reach);
 }
 
+// Sums weight * exp(-|center - x|^2 / (2 sigma^2)); a kernel whose exponent exceeds max_q is
+// skipped (a particle farther than cutoff sigma: max_q = cutoff^2 / 2, within R1-RND-055's bound).
 struct Accumulator {
   double w = 0;
   Vec3 c, f;
-  void add(double weight, const Vec3& center, const Vec3& color, const Vec3& x, double inv2s2) {
+  std::uint64_t kernels = 0;
+  void add(double weight, const Vec3& center, const Vec3& color, const Vec3& x, double inv2s2,
+           double max_q = std::numeric_limits<double>::infinity()) {
     const Vec3 d = center - x;
-    const double k = weight * std::exp(-dot(d, d) * inv2s2);
+    const double q = dot(d, d) * inv2s2;
+    if (q > max_q) return;
+    ++kernels;
+    const double k = weight * std::exp(-q);
     w += k;
     c += color * k;
     f += d * k;
@@ -55,6 +60,15 @@ struct Accumulator {
     return v;
   }
 };
+
+// Every field member of level-0 node `id` within cutoff sigma of x, one kernel each.
+void add_members(const FieldFrame& ff, std::uint32_t id, const Vec3& x, double inv2s2, Accumulator& acc) {
+  const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
+  for (std::uint32_t k = ff.member_begin[id]; k < ff.member_begin[id + 1]; ++k) {
+    const FieldFrame::Member& m = ff.members[k];
+    acc.add(m.weight, m.position, m.color, x, inv2s2, max_q);
+  }
+}
 
 }  // namespace
 
@@ -106,6 +120,13 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
       ff.node_extent[l][id] = std::max(ff.node_extent[l][id], length(s.position[i] - ff.node_centroid[l][id]));
     }
   }
+  const auto& level0 = s.hierarchy->levels[0];
+  ff.member_begin.assign(level0.size() + 1, 0);
+  for (std::size_t id = 0; id < level0.size(); ++id) {
+    for (std::uint32_t q : level0[id].children)
+      if (ff.weight[q] > 0) ff.members.push_back({s.position[q], s.color[q], ff.weight[q]});
+    ff.member_begin[id + 1] = static_cast<std::uint32_t>(ff.members.size());
+  }
   const double dist = length(v.camera.position - s.centroid);
   const double g = 1.0 + dist / static_cast<double>(kSceneRadius);
   ff.tau_cam = s.tau0 * g * g;
@@ -139,26 +160,23 @@ FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma)
   const Scene& s = *ff.scene;
   Accumulator acc;
   const double inv = 1.0 / (2 * sigma * sigma);
-  const double reach2 = ff.params.cutoff * sigma * ff.params.cutoff * sigma;
+  const double reach = ff.params.cutoff * sigma;
   std::vector<std::pair<int, std::uint32_t>> stack;
   for (std::uint32_t id = 0; id < s.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
   while (!stack.empty()) {
     const auto [l, id] = stack.back();
     stack.pop_back();
-    const NodeData& d = s.nodes[static_cast<std::size_t>(l)][id];
     const auto L = static_cast<std::size_t>(l);
-    if (ff.node_weight[L][id] <= 0 || box_distance2(x, d.lo, d.hi) > reach2) continue;
+    if (ff.node_weight[L][id] <= 0 || !within_reach(x, ff.node_centroid[L][id], ff.node_extent[L][id], reach)) continue;
     if (ff.node_extent[L][id] <= ff.params.theta * sigma) {
       acc.add(ff.node_weight[L][id], ff.node_centroid[L][id], ff.node_color[L][id], x, inv);
       continue;
     }
-    for (std::uint32_t c : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children) {
-      if (l == 0) {
-        if (ff.weight[c] > 0) acc.add(ff.weight[c], s.position[c], s.color[c], x, inv);
-      } else {
-        stack.push_back({l - 1, c});
-      }
+    if (l == 0) {
+      add_members(ff, id, x, inv, acc);
+      continue;
     }
+    for (std::uint32_t c : s.hierarchy->levels[L][id].children) stack.push_back({l - 1, c});
   }
   return acc.value(ff.params.kappa, sigma);
 }
@@ -192,12 +210,13 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   while (!stack.empty()) {
     const auto [l, id] = stack.back();
     stack.pop_back();
-    const NodeData& d = s.nodes[static_cast<std::size_t>(l)][id];
-    if (ff.node_weight[static_cast<std::size_t>(l)][id] <= 0) continue;  // nothing of it is in the field this frame
+    if (stats) ++stats->walked;
+    const auto L = static_cast<std::size_t>(l);
+    if (ff.node_weight[L][id] <= 0) continue;  // nothing of it is in the field this frame
     double t0 = kNear, t1 = t_end;
-    slab(ray, d.lo, d.hi, grow, t0, t1);
+    ray_ball(ray, ff.node_centroid[L][id], ff.node_extent[L][id] + grow, t0, t1);
     if (t0 > t1) continue;
-    const bool aggregate = ff.node_extent[static_cast<std::size_t>(l)][id] <= p.theta * field_sigma(ff, t0);
+    const bool aggregate = ff.node_extent[L][id] <= p.theta * field_sigma(ff, t0);
     if (aggregate || l == 0) {
       cands.push_back({l, id, aggregate, t0, t1});
       a = std::min(a, t0);
@@ -208,28 +227,45 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   }
   if (stats) stats->candidates += cands.size();
   if (cands.empty() || !(b > a)) return;
+  // Sweep: candidates in order of entry (ties by level and id), an active list of those whose
+  // interval may hold the current sample, kept in that order; the march usually saturates long
+  // before the last candidate is reached.
+  std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
+    return x.t0 != y.t0 ? x.t0 < y.t0 : (x.level != y.level ? x.level < y.level : x.id < y.id);
+  });
+  std::vector<const Candidate*> active;
+  std::size_t next = 0;
   const double delta = (b - a) / p.samples;
   double transmittance = 1;
   for (int i = 0; i < p.samples && transmittance >= p.stop; ++i) {
     const double t = a + (i + rng::uniform_double(s.seed, pixel, static_cast<std::uint64_t>(i))) * delta;
     const double sigma = field_sigma(ff, t);
     const double inv = 1.0 / (2 * sigma * sigma);
-    const double reach2 = p.cutoff * sigma * p.cutoff * sigma;
+    const double reach = p.cutoff * sigma;
+    while (next < cands.size() && cands[next].t0 <= t) active.push_back(&cands[next++]);
+    std::erase_if(active, [t](const Candidate* c) { return c->t1 < t; });
+    if (active.empty()) {
+      // No node reaches this sample: skip to the stratum of the next entry (exact: such samples
+      // add nothing, and every sample's jitter depends only on its own index).
+      if (next == cands.size()) break;
+      const double stratum = std::floor((cands[next].t0 - a) / delta);
+      if (stratum > i) i = static_cast<int>(std::min(stratum, static_cast<double>(p.samples))) - 1;
+      continue;
+    }
     const Vec3 x = ray.at(t);
+    if (stats) ++stats->samples;
     Accumulator acc;
-    for (const Candidate& c : cands) {
-      if (t < c.t0 || t > c.t1) continue;
-      const NodeData& d = s.nodes[static_cast<std::size_t>(c.level)][c.id];
-      if (box_distance2(x, d.lo, d.hi) > reach2) continue;
-      if (stats) ++stats->evaluations;
+    for (const Candidate* cp : active) {
+      const Candidate& c = *cp;
+      const auto L = static_cast<std::size_t>(c.level);
+      if (!within_reach(x, ff.node_centroid[L][c.id], ff.node_extent[L][c.id], reach)) continue;
       if (c.aggregate) {
-        acc.add(ff.node_weight[static_cast<std::size_t>(c.level)][c.id], ff.node_centroid[static_cast<std::size_t>(c.level)][c.id],
-                ff.node_color[static_cast<std::size_t>(c.level)][c.id], x, inv);
+        acc.add(ff.node_weight[L][c.id], ff.node_centroid[L][c.id], ff.node_color[L][c.id], x, inv);
         continue;
       }
-      for (std::uint32_t q : s.hierarchy->levels[0][c.id].children)
-        if (ff.weight[q] > 0) acc.add(ff.weight[q], s.position[q], s.color[q], x, inv);
+      add_members(ff, c.id, x, inv, acc);
     }
+    if (stats) stats->evaluations += acc.kernels;
     if (acc.w <= 0) continue;
     const FieldValue v = acc.value(p.kappa, sigma);
     const double alpha = 1.0 - std::exp(-v.density * delta);

@@ -37,6 +37,14 @@ struct FieldFrame {
   std::array<std::vector<double>, kLevels> node_weight;
   std::array<std::vector<Vec3>, kLevels> node_centroid, node_color;
   std::array<std::vector<double>, kLevels> node_extent;
+  // Per level-0 node, its members with field weight > 0, stored together in member order:
+  // members[member_begin[id] .. member_begin[id + 1]).
+  struct Member {
+    Vec3 position, color;
+    double weight = 0;
+  };
+  std::vector<std::uint32_t> member_begin;
+  std::vector<Member> members;
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   double focal_px = 1;
@@ -63,7 +71,10 @@ struct FieldSample {
 };
 
 struct FieldRayStats {
-  std::uint64_t candidates = 0, evaluations = 0;
+  std::uint64_t walked = 0;       // nodes the candidate walk tested
+  std::uint64_t candidates = 0;   // nodes the march considered (R1-RND-057)
+  std::uint64_t samples = 0;      // samples evaluated (some node within reach of its interval)
+  std::uint64_t evaluations = 0;  // kernel evaluations over all samples
 };
 
 // The stratified, jittered march of 7.2 along `ray` up to t_max (an opaque hit), samples

@@ -84,36 +84,6 @@ Endpoint endpoint_of(const Scene& s, const View& v, const CameraFrame& f, std::u
   return {kLevels - 1, s.hierarchy->cluster_of[kLevels - 1][p]};
 }
 
-std::vector<Tube> bundle(const Scene& s, const View& v, const CameraFrame& f, const std::vector<double>& size, BundleStats& st) {
-  // Only edges with an endpoint drawn at T2 or above are drawn (R1-RND-064); each endpoint below
-  // T2 is replaced by its cluster and equal endpoint pairs merge into one tube.
-  std::map<std::pair<Endpoint, Endpoint>, Tube> merged;
-  for (const LayoutEdge& e : s.edges) {
-    const bool big_p = size[e.p] > v.tiers.t2, big_q = size[e.q] > v.tiers.t2;
-    if (!big_p && !big_q) continue;
-    ++st.considered;
-    Endpoint a = endpoint_of(s, v, f, e.p, size[e.p]), b = endpoint_of(s, v, f, e.q, size[e.q]);
-    double a2 = Q32::from_raw(e.a2_raw).to_double();
-    double deg = s.degree[e.p];
-    if (b < a) {
-      std::swap(a, b);
-      a2 = -a2;
-      deg = s.degree[e.q];
-    }
-    if (a == b) continue;
-    Tube& t = merged[{a, b}];
-    t.a = a, t.b = b;
-    t.w += Q32::from_raw(e.w_raw).to_double();
-    t.a2 += a2;
-    t.degree_a += deg;
-  }
-  std::vector<Tube> out;
-  out.reserve(merged.size());
-  for (auto& [key, t] : merged) out.push_back(t);
-  st.drawn = out.size();
-  return out;
-}
-
 Vec3 endpoint_position(const Scene& s, const Endpoint& e) {
   return e.level < 0 ? s.position[e.id] : s.nodes[static_cast<std::size_t>(e.level)][e.id].centroid;
 }
@@ -122,6 +92,82 @@ double endpoint_radius(const Scene& s, const Endpoint& e) {
 }
 Vec3 endpoint_color(const Scene& s, const Endpoint& e) {
   return e.level < 0 ? s.color[e.id] : s.nodes[static_cast<std::size_t>(e.level)][e.id].color;
+}
+
+// The nodes an edge between endpoints a and b runs through (R1-RND-064, after Holten 2006): up
+// a's ancestors to the child of their lowest common ancestor, across, and down b's ancestors.
+// The common ancestor itself is on the route only when it is one of the endpoints.
+Endpoint parent_of(const Scene& s, const Endpoint& e) {
+  if (e.level < 0) return {0, s.hierarchy->cluster_of[0][e.id]};
+  return {e.level + 1, s.hierarchy->levels[static_cast<std::size_t>(e.level)][e.id].parent};
+}
+
+int ancestors(const Scene& s, Endpoint e, std::array<Endpoint, kLevels + 1>& chain) {
+  int n = 0;
+  chain[static_cast<std::size_t>(n++)] = e;
+  while (e.level < kLevels - 1) chain[static_cast<std::size_t>(n++)] = e = parent_of(s, e);
+  return n;
+}
+
+int route(const Scene& s, const Endpoint& a, const Endpoint& b, std::array<Endpoint, 2 * kLevels + 2>& out) {
+  std::array<Endpoint, kLevels + 1> ca, cb;
+  const int na = ancestors(s, a, ca), nb = ancestors(s, b, cb);
+  // Both chains end at the single top-level cluster, so a common node always exists.
+  int i = 0, j = 0;
+  for (i = 0; i < na; ++i) {
+    j = 0;
+    while (j < nb && !(cb[static_cast<std::size_t>(j)] == ca[static_cast<std::size_t>(i)])) ++j;
+    if (j < nb) break;
+  }
+  int n = 0;
+  if (i == na) {  // separate top-level clusters (a disconnected hierarchy): join the two chains
+    for (int k = 0; k < na; ++k) out[static_cast<std::size_t>(n++)] = ca[static_cast<std::size_t>(k)];
+    for (int k = nb - 1; k >= 0; --k) out[static_cast<std::size_t>(n++)] = cb[static_cast<std::size_t>(k)];
+    return n;
+  }
+  for (int k = 0; k < i; ++k) out[static_cast<std::size_t>(n++)] = ca[static_cast<std::size_t>(k)];
+  if (i == 0 || j == 0) out[static_cast<std::size_t>(n++)] = ca[static_cast<std::size_t>(i)];
+  for (int k = j - 1; k >= 0; --k) out[static_cast<std::size_t>(n++)] = cb[static_cast<std::size_t>(k)];
+  return n;
+}
+
+std::vector<Tube> bundle(const Scene& s, const View& v, const CameraFrame& f, const std::vector<double>& size, BundleStats& st) {
+  // Only edges with an endpoint drawn at T2 or above are drawn; each endpoint below T2 is
+  // replaced by its cluster, every edge follows its route through the hierarchy, and equal
+  // segments of different routes merge into one tube (R1-RND-064).
+  std::map<std::pair<Endpoint, Endpoint>, Tube> merged;
+  std::array<Endpoint, 2 * kLevels + 2> nodes;
+  for (const LayoutEdge& e : s.edges) {
+    if (size[e.p] > 0 && size[e.q] > 0) ++st.in_view;
+    const bool big_p = size[e.p] > v.tiers.t2, big_q = size[e.q] > v.tiers.t2;
+    if (!big_p && !big_q) continue;
+    ++st.considered;
+    const int n = route(s, endpoint_of(s, v, f, e.p, size[e.p]), endpoint_of(s, v, f, e.q, size[e.q]), nodes);
+    for (int k = 0; k + 1 < n; ++k) {
+      Endpoint a = nodes[static_cast<std::size_t>(k)], b = nodes[static_cast<std::size_t>(k + 1)];
+      if (endpoint_position(s, a) == endpoint_position(s, b)) continue;  // a one-member cluster
+      double a2 = Q32::from_raw(e.a2_raw).to_double();
+      double deg = s.degree[e.p];
+      if (b < a) {
+        std::swap(a, b);
+        a2 = -a2;
+        deg = s.degree[e.q];
+      }
+      Tube& t = merged[{a, b}];
+      t.a = a, t.b = b;
+      t.w += Q32::from_raw(e.w_raw).to_double();
+      t.a2 += a2;
+      t.degree_a += deg;
+    }
+  }
+  std::vector<Tube> out;
+  out.reserve(merged.size());
+  for (auto& [key, t] : merged) {
+    out.push_back(t);
+    st.max_weight = std::max(st.max_weight, t.w);
+  }
+  st.drawn = out.size();
+  return out;
 }
 
 // Screen diameters of the visible particles; 0 for every particle outside the frustum, so only
@@ -219,6 +265,110 @@ BundleStats bundle_counts(const Scene& scene, const View& view) {
   return st;
 }
 
+namespace {
+
+// Per image row, the hull of the columns whose centres lie within hw pixels of the projected
+// segment pa-pb (a capsule), accumulated into lo/hi (indexed by row); widens [row_min, row_max]
+// to the rows it touched.
+void capsule_rows(const Projected& pa, const Projected& pb, double hw, std::vector<double>& lo, std::vector<double>& hi, int& row_min,
+                  int& row_max) {
+  const int rows = static_cast<int>(lo.size());
+  const auto to_row = [rows](double d) { return static_cast<int>(std::clamp(d, -1.0, static_cast<double>(rows))); };
+  const int y0 = std::max(0, to_row(std::ceil(std::min(pa.py, pb.py) - hw - 0.5)));
+  const int y1 = std::min(rows - 1, to_row(std::floor(std::max(pa.py, pb.py) + hw - 0.5)));
+  const double dx = pb.px - pa.px, dy = pb.py - pa.py, len2 = dx * dx + dy * dy;
+  if (y0 <= y1) row_min = std::min(row_min, y0), row_max = std::max(row_max, y1);
+  for (int y = y0; y <= y1; ++y) {
+    const double yc = y + 0.5;
+    double l = kInf, h = -kInf;
+    // The two end discs.
+    for (const Projected* e : {&pa, &pb}) {
+      const double h2 = hw * hw - (yc - e->py) * (yc - e->py);
+      if (h2 < 0) continue;
+      l = std::min(l, e->px - std::sqrt(h2));
+      h = std::max(h, e->px + std::sqrt(h2));
+    }
+    // The band between them: 0 <= (P - a).d <= |d|^2 and |(P - a) x d| <= hw |d|, P = (x, yc).
+    if (len2 > 0) {
+      double bl = -kInf, bh = kInf;
+      const auto keep = [&](double alpha, double beta, double lo_v, double hi_v) {  // lo_v <= alpha x + beta <= hi_v
+        if (alpha == 0) {
+          if (beta < lo_v || beta > hi_v) bl = kInf, bh = -kInf;
+          return;
+        }
+        double u = (lo_v - beta) / alpha, w = (hi_v - beta) / alpha;
+        if (u > w) std::swap(u, w);
+        bl = std::max(bl, u), bh = std::min(bh, w);
+      };
+      keep(dx, -pa.px * dx + (yc - pa.py) * dy, 0, len2);
+      const double reach = hw * std::sqrt(len2);
+      keep(dy, -pa.px * dy - (yc - pa.py) * dx, -reach, reach);
+      if (bl <= bh) l = std::min(l, bl), h = std::max(h, bh);
+    }
+    const std::size_t k = static_cast<std::size_t>(y);
+    lo[k] = std::min(lo[k], l), hi[k] = std::max(hi[k], h);
+  }
+}
+
+}  // namespace
+
+std::vector<RowSpan> tube_spans(const View& v, const CameraFrame& f, const Vec3& a, const Vec3& b, double rho) {
+  std::vector<RowSpan> rows;
+  // Clip the segment to the frustum widened by rho on every side (a point further out has no
+  // tube point inside the view) and to depth 2 rho + near (nearer, the bound below degenerates;
+  // that sliver of a tube is not drawn).
+  const auto cam = [&](const Vec3& p) {
+    const Vec3 r = p - v.camera.position;
+    return Vec3{dot(r, f.right), dot(r, f.up), dot(r, f.forward)};
+  };
+  const Vec3 ca = cam(a), cb = cam(b);
+  const double tx = f.tan_half_fov * v.width / v.height, ty = f.tan_half_fov;
+  const double nx = std::sqrt(1 + tx * tx), ny = std::sqrt(1 + ty * ty);
+  double t0 = 0, t1 = 1;
+  const auto keep = [&](const auto& g) {  // keeps the part of the segment where g <= 0 (g linear)
+    const double ga = g(ca), gb = g(cb);
+    if (ga > 0 && gb > 0) t0 = 1, t1 = 0;
+    else if (ga > 0) t0 = std::max(t0, ga / (ga - gb));
+    else if (gb > 0) t1 = std::min(t1, ga / (ga - gb));
+  };
+  keep([&](const Vec3& c) { return 2 * rho + kNear - c.z; });
+  keep([&](const Vec3& c) { return (c.x - c.z * tx) / nx - rho; });
+  keep([&](const Vec3& c) { return (-c.x - c.z * tx) / nx - rho; });
+  keep([&](const Vec3& c) { return (c.y - c.z * ty) / ny - rho; });
+  keep([&](const Vec3& c) { return (-c.y - c.z * ty) / ny - rho; });
+  if (!(t0 <= t1)) return rows;
+  const Vec3 ea = a + (b - a) * t0, eb = a + (b - a) * t1;
+  const double za = ca.z + (cb.z - ca.z) * t0, zb = ca.z + (cb.z - ca.z) * t1;
+  // A point within rho of a segment point at depth z and pixel offset s from the image centre
+  // projects within rho sqrt(f^2 + |s|^2) / (z - rho) pixels of that point's projection. Depth is
+  // smallest and |s| largest at an end of a piece, so pieces over which depth at most doubles
+  // keep the bound near the tube's own width.
+  std::vector<double> lo(static_cast<std::size_t>(v.height), kInf), hi(static_cast<std::size_t>(v.height), -kInf);
+  const double cx = 0.5 * v.width, cy = 0.5 * v.height;
+  int row_min = v.height, row_max = -1;
+  Vec3 start = ea;
+  double z_start = za;
+  while (true) {
+    const bool last = std::max(z_start, zb) <= 2 * std::min(z_start, zb);
+    const double z_end = last ? zb : (zb > z_start ? 2 * z_start : 0.5 * z_start);
+    const Vec3 end = last ? eb : ea + (eb - ea) * ((z_end - za) / (zb - za));
+    const Projected pa = project(v, f, start), pb = project(v, f, end);
+    const double s_max = std::max(std::hypot(pa.px - cx, pa.py - cy), std::hypot(pb.px - cx, pb.py - cy));
+    const double z_min = std::min(pa.depth, pb.depth);
+    capsule_rows(pa, pb, rho * std::sqrt(f.focal_px * f.focal_px + s_max * s_max) / (z_min - rho) + 0.5, lo, hi, row_min, row_max);
+    if (last) break;
+    start = end, z_start = z_end;
+  }
+  const auto to_col = [&](double d) { return static_cast<int>(std::clamp(d, 0.0, static_cast<double>(v.width))); };
+  for (int y = row_min; y <= row_max; ++y) {
+    const std::size_t k = static_cast<std::size_t>(y);
+    if (!(lo[k] <= hi[k])) continue;
+    const int x0 = to_col(std::ceil(lo[k] - 0.5)), x1 = to_col(std::floor(hi[k] - 0.5) + 1);
+    if (x0 < x1) rows.push_back({y, x0, x1});
+  }
+  return rows;
+}
+
 Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& options, FrameStats* stats_out,
                            const ProgressFn& progress) {
   using clock = std::chrono::steady_clock;
@@ -266,6 +416,7 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   if (v.edges) {
     BundleStats bs;
     const std::vector<Tube> tubes = bundle(s, v, f, size, bs);
+    st.edges_in_view = bs.in_view;
     st.edges_considered = bs.considered;
     st.edges_drawn = bs.drawn;
     for (const Tube& tube : tubes) {
@@ -273,25 +424,14 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
       const double cap = 0.3 * std::min(endpoint_radius(s, tube.a), endpoint_radius(s, tube.b));
       const double rho = std::min(0.1 * s.median_radius * std::sqrt(tube.w), cap);
       if (!(rho > 0)) continue;
-      // The pixel rectangle comes from the part of the segment at least 2 rho in front of the
-      // camera (a tube reaching behind it would otherwise cover the whole image); the hits below
-      // still use the whole tube, so only a sliver within 2 rho of the eye can be missed.
-      Vec3 ea = a, eb = b;
-      const double near_d = 2 * rho + kNear;
-      const double da = dot(a - v.camera.position, f.forward), db = dot(b - v.camera.position, f.forward);
-      if (da < near_d && db < near_d) continue;
-      if (da < near_d) ea = a + (b - a) * ((near_d - da) / (db - da));
-      if (db < near_d) eb = b + (a - b) * ((near_d - db) / (da - db));
-      const Vec3 lo{std::min(ea.x, eb.x) - rho, std::min(ea.y, eb.y) - rho, std::min(ea.z, eb.z) - rho};
-      const Vec3 hi{std::max(ea.x, eb.x) + rho, std::max(ea.y, eb.y) + rho, std::max(ea.z, eb.z) + rho};
-      const Rect rect = project_box(v, f, lo, hi);
       // Flow: v = sign(A2) |P_ab| cycles per second along the strip (R-1.0 8.2).
       const double p_ab = tube.degree_a > 0 ? tube.w / tube.degree_a : 0.0;
       const double speed = (tube.a2 > 0 ? 1.0 : (tube.a2 < 0 ? -1.0 : 0.0)) * std::fabs(p_ab);
       const double stripes = std::max(1.0, std::round(length(b - a) / (8 * rho)));
       const Vec3 ca = endpoint_color(s, tube.a), cb = endpoint_color(s, tube.b);
-      for (int y = rect.y0; y < rect.y1; ++y)
-        for (int x = rect.x0; x < rect.x1; ++x) {
+      for (const RowSpan& row : tube_spans(v, f, a, b, rho))
+        for (int x = row.x0; x < row.x1; ++x) {
+          const int y = row.y;
           const std::size_t k = static_cast<std::size_t>(y) * W + x;
           const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
           const auto hit = intersect_tube(a, b, rho, ray, kNear, op.t[k]);
@@ -398,6 +538,8 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   }
   if (any_flow) image.flow = std::move(flow);
   image.depth = op.t;
+  st.field_walked = fs.walked;
+  st.field_samples = fs.samples;
   st.field_candidates = fs.candidates;
   st.field_evaluations = fs.evaluations;
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "cull.hpp"
 #include "field.hpp"
@@ -20,10 +21,11 @@ namespace r1::render {
 struct FrameStats {
   std::array<std::uint64_t, 5> tier_count{};  // visible particles per tier (T0..T-inf)
   std::uint64_t visible = 0, culled_nodes = 0, nodes_tested = 0;
+  std::uint64_t edges_in_view = 0;     // layout edges with both endpoints visible
   std::uint64_t edges_considered = 0;  // layout edges with an endpoint at T2 or above
   std::uint64_t edges_drawn = 0;       // tube instances after bundling
   std::uint64_t splats = 0, labels = 0;
-  std::uint64_t field_candidates = 0, field_evaluations = 0;
+  std::uint64_t field_walked = 0, field_candidates = 0, field_samples = 0, field_evaluations = 0;
   // Seconds per stage.
   double cull_s = 0, impostor_s = 0, edge_s = 0, splat_s = 0, field_s = 0, label_s = 0, total_s = 0;
 };
@@ -40,8 +42,19 @@ Result<Image> render_frame(const Scene& scene, const View& view, const RenderOpt
 
 // Edge bundling alone (R1-RND-064), for the README's reduction table and tests.
 struct BundleStats {
+  std::uint64_t in_view = 0;  // layout edges with both endpoints visible (what an unbundled renderer draws)
   std::uint64_t considered = 0, drawn = 0;
+  double max_weight = 0;  // the largest combined weight of one tube
 };
 BundleStats bundle_counts(const Scene& scene, const View& view);
+
+// The pixels an edge tube of radius rho between a and b may cover (R1-RND-065): per image row,
+// the columns [x0, x1) whose centres lie within hw pixels of the projected segment, hw bounding
+// the projection of any point within rho of the segment. The part of the segment nearer than
+// 2 rho + kNear to the camera is left out; no rows when all of it is.
+struct RowSpan {
+  int y = 0, x0 = 0, x1 = 0;
+};
+std::vector<RowSpan> tube_spans(const View& view, const CameraFrame& frame, const Vec3& a, const Vec3& b, double rho);
 
 }  // namespace r1::render
