@@ -141,6 +141,36 @@ TEST(Splat, LoneSplatIntegratesToItsOpacity) {
   EXPECT_NEAR(alpha / (2 * kPi * var), r1::kSplatOpacity, 0.01 * r1::kSplatOpacity);
 }
 
+TEST(Splat, StretchFollowsTheGradientOfU5) {
+  // u5 rises along +x toward a far particle out of view, so the visible splat's covariance is
+  // sigma^2 (I + k x x^T): on screen, variance (1 + k) sp^2 + 0.3 along x and sp^2 + 0.3 along y.
+  const double r = 0.6, D = 40;
+  const int size = 101;
+  r1::Epoch e = make_epoch({{0, 0, 0}, {1000, 0, 0}}, r, r1::Shape::kSphere);
+  e.spectrum.u[3][1] = Q32::from_double(0.5);
+  const Scene s = make_scene(e);
+  const auto variance_ratio = [&](double k) {
+    View v = lone_view({0, 0, D}, size);
+    v.splat_stretch = k;
+    FrameStats st;
+    auto img = render_frame(s, v, {}, &st);
+    EXPECT_TRUE(img.is_ok());
+    EXPECT_EQ(st.splats, 1u);
+    double vx = 0, vy = 0;
+    const double c = size / 2.0;
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        const double a = static_cast<double>(img->px(x, y)[3]);
+        vx += a * (x + 0.5 - c) * (x + 0.5 - c), vy += a * (y + 0.5 - c) * (y + 0.5 - c);
+      }
+    return vx / vy;
+  };
+  const double sp = r1::kSplatSigmaPerRadius * r * focal(size) / D;
+  EXPECT_NEAR(variance_ratio(0), 1.0, 0.02);
+  const double k = 3;
+  EXPECT_NEAR(variance_ratio(k), ((1 + k) * sp * sp + 0.3) / (sp * sp + 0.3), 0.05 * (1 + k));
+}
+
 // ---- tiers ----
 
 TEST(Tiers, AssignmentIsExactAtTheThresholds) {

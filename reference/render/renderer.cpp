@@ -112,7 +112,8 @@ int ancestors(const Scene& s, Endpoint e, std::array<Endpoint, kLevels + 1>& cha
 int route(const Scene& s, const Endpoint& a, const Endpoint& b, std::array<Endpoint, 2 * kLevels + 2>& out) {
   std::array<Endpoint, kLevels + 1> ca, cb;
   const int na = ancestors(s, a, ca), nb = ancestors(s, b, cb);
-  // Both chains end at the single top-level cluster, so a common node always exists.
+  // The first node of a's chain that is also on b's: their lowest common ancestor (none when the
+  // hierarchy has several top-level clusters and a and b lie under different ones).
   int i = 0, j = 0;
   for (i = 0; i < na; ++i) {
     j = 0;
