@@ -3,13 +3,11 @@
 
 #include <sys/resource.h>
 
-#include <chrono>
+#include "r1/spec/progress.hpp"  // seconds_since
 
 namespace r1::cli {
 
-inline double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
+using r1::seconds_since;
 
 // Peak resident memory of this process in MiB.
 inline double peak_rss_mib() {

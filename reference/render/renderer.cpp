@@ -19,10 +19,6 @@ constexpr double kSplatLowPass = 0.3;        // px^2 added to the projected cova
 constexpr double kMinAlpha = 1.0 / 255.0;    // splat contributions below this are dropped
 constexpr int kTile = 16;                    // splat binning tile, pixels
 
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
 // The pixel rectangle [x0, x1) x [y0, y1) that holds the projection of a box; the whole image
 // when part of the box lies at or behind the near plane.
 struct Rect {
