@@ -5,7 +5,7 @@ CMAKE_FLAGS ?=
 R1 := build/cli/r1
 OUT ?= out
 
-.PHONY: all deps configure build run test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench
+.PHONY: all deps configure build run test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench golden conform
 
 all: build
 
@@ -60,6 +60,19 @@ fuzz-build: deps
 FUZZ_SECONDS ?= 15
 fuzz-smoke: fuzz-build
 	@scripts/fuzz-smoke.sh build-fuzz $(FUZZ_SECONDS)
+
+# Rewrites the committed golden set from the reference and prints what changed against it
+# (spec/conformance.md R1-CONF-042). Review the printed changes before committing golden/.
+golden: configure
+	@cmake --build build -j $(JOBS) --target r1_cli
+	@$(R1) golden -o golden/small
+
+# Every check of R-1.0 15 on BACKEND (default reference), written to $(OUT)/r1_conformance.toml.
+BACKEND ?= reference
+conform: configure
+	@cmake --build build -j $(JOBS) --target r1_cli
+	@mkdir -p $(OUT)
+	@$(R1) conform --backend $(BACKEND) -o $(OUT)/r1_conformance.toml
 
 bench: build
 	@for b in build/bench/r1_bench_*; do $$b; done

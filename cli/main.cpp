@@ -19,6 +19,9 @@ int main(int argc, char** argv) {
   r1::cli::add_export(app, selected);
   r1::cli::add_spectrum(app, selected);
   r1::cli::add_render(app, selected);
+  r1::cli::add_golden(app, selected);
+  r1::cli::add_conform(app, selected);
+  r1::cli::add_diff(app, selected);
 
   try {
     app.parse(argc, argv);
@@ -54,5 +57,10 @@ int main(int argc, char** argv) {
     std::cerr << "r1: cannot write to standard output\n";
     return 3;
   }
-  return 0;
+  return r1::cli::verdict_exit();
+}
+
+int& r1::cli::verdict_exit() {
+  static int code = 0;
+  return code;
 }

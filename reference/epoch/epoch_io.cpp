@@ -72,15 +72,7 @@ const char* domain_name(NumericDomain d) { return d == NumericDomain::kQ32 ? "q3
 // Q32 parameters as their exact decimal strings: a JSON number would pass through a double.
 json q32_json(Q32 q) { return q.to_exact_string(); }
 
-bool is_epoch_dir(const fs::path& dir) {
-  std::ifstream f(dir / "manifest.json");
-  if (!f) return false;
-  try {
-    return json::parse(f).value("format", "") == kFormat;
-  } catch (const json::exception&) {
-    return false;
-  }
-}
+bool is_epoch_dir(const fs::path& dir) { return manifest_format_is(dir, kFormat); }
 
 }  // namespace
 

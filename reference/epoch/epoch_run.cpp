@@ -49,7 +49,33 @@ Result<Spectrum<Q32>> to_q32(const Spectrum<double>& s) {
 
 }  // namespace
 
-Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const ProgressFn& progress) {
+Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& o, const ProgressFn& progress) {
+  SpectralOptions so;
+  so.parallel = o.parallel;
+  if (o.domain == NumericDomain::kQ32) return spectral_embedding_q32(graph, o.spectral, progress, so);
+  R1_ASSIGN(const Spectrum<double> s, spectral_embedding_f64(graph, o.spectral, progress, so));
+  return to_q32(s);
+}
+
+Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& o, double lambda2, const ProgressFn& progress) {
+  FocusOptions fo;
+  fo.parallel = o.parallel;
+  if (o.domain == NumericDomain::kQ32) return compute_focus_q32(graph, o.trikernel, lambda2, progress, fo);
+  R1_ASSIGN(const Focus<double> f, compute_focus_f64(graph, o.trikernel, lambda2, progress, fo));
+  Focus<Q32> q;
+  q.steps = f.steps;
+  q.kappa = f.kappa;
+  q.lambda_max = f.lambda_max;
+  q.syntropy = f.syntropy;
+  q.cyberank = f.cyberank;
+  R1_ASSIGN(q.phi, simplex_from_f64(f.phi));  // R1-EPO-004
+  return q;
+}
+
+Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const ProgressFn& progress,
+                        const EpochStages* stages) {
+  const EpochStages none;
+  const EpochStages& st = stages ? *stages : none;
   Epoch e;
   Stopwatch clock(e.timings);
   e.domain = o.domain;
@@ -75,30 +101,19 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   e.trikernel = o.trikernel;
   e.spectral_params = o.spectral;
 
-  SpectralOptions so;
-  so.parallel = o.parallel;
-  FocusOptions fo;
-  fo.parallel = o.parallel;
-  if (o.domain == NumericDomain::kQ32) {
-    R1_ASSIGN(e.spectrum, spectral_embedding_q32(graph, o.spectral, progress, so));
+  if (st.spectral) {
+    R1_ASSIGN(e.spectrum, st.spectral(graph, o, progress));
   } else {
-    R1_ASSIGN(const Spectrum<double> s, spectral_embedding_f64(graph, o.spectral, progress, so));
-    R1_ASSIGN(e.spectrum, to_q32(s));
+    R1_ASSIGN(e.spectrum, reference_spectral_stage(graph, o, progress));
   }
   clock.lap("spectral");
 
   // R1-EPO-002: lambda_2 for T(eps); 0 for a disconnected graph.
   const double lambda2 = e.components == 1 && e.spectrum.found >= 1 ? e.spectrum.eigenvalues[1] : 0.0;
-  if (o.domain == NumericDomain::kQ32) {
-    R1_ASSIGN(e.focus, compute_focus_q32(graph, o.trikernel, lambda2, progress, fo));
+  if (st.focus) {
+    R1_ASSIGN(e.focus, st.focus(graph, o, lambda2, progress));
   } else {
-    R1_ASSIGN(const Focus<double> f, compute_focus_f64(graph, o.trikernel, lambda2, progress, fo));
-    e.focus.steps = f.steps;
-    e.focus.kappa = f.kappa;
-    e.focus.lambda_max = f.lambda_max;
-    e.focus.syntropy = f.syntropy;
-    e.focus.cyberank = f.cyberank;
-    R1_ASSIGN(e.focus.phi, simplex_from_f64(f.phi));  // R1-EPO-004
+    R1_ASSIGN(e.focus, reference_focus_stage(graph, o, lambda2, progress));
   }
   clock.lap("focus");
 
@@ -108,14 +123,32 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
     R1_ASSIGN(Anchor a, read_anchor(o.anchor_path));
     anchor = std::move(a);
   }
-  R1_ASSIGN(e.frame, compute_frame(snapshot, e.spectrum, anchor ? &*anchor : nullptr, o.anchor_path));
+  const Anchor* anchor_ptr = anchor ? &*anchor : nullptr;
+  if (st.frame) {
+    R1_ASSIGN(e.frame, st.frame(snapshot, e.spectrum, anchor_ptr, o.anchor_path));
+  } else {
+    R1_ASSIGN(e.frame, compute_frame(snapshot, e.spectrum, anchor_ptr, o.anchor_path));
+  }
   clock.lap("frame");
 
-  R1_ASSIGN(e.encoding, encode(snapshot, graph, e.focus, e.spectrum, o.encoding, nullptr, progress));
+  if (st.encoding) {
+    R1_ASSIGN(e.encoding, st.encoding(snapshot, graph, e.focus, e.spectrum, o.encoding, progress));
+  } else {
+    R1_ASSIGN(e.encoding, encode(snapshot, graph, e.focus, e.spectrum, o.encoding, nullptr, progress));
+  }
   clock.lap("encoding");
 
-  R1_ASSIGN(e.hierarchy, build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
+  if (st.hierarchy) {
+    R1_ASSIGN(e.hierarchy, st.hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
+  } else {
+    R1_ASSIGN(e.hierarchy, build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
+  }
   clock.lap("hierarchy");
+  // A stage from elsewhere must hand back data of the epoch's shape (R1-BKD-011).
+  const std::size_t n = e.ids.size();
+  if (e.focus.phi.size() != n || e.frame.position.size() != n || e.encoding.color.size() != n ||
+      e.hierarchy.cluster_of[0].size() != n)
+    return Status::internal("an epoch stage returned data for the wrong number of particles");
   return e;
 }
 

@@ -8,6 +8,9 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
 
 namespace r1 {
 
@@ -87,6 +90,16 @@ Status AtomicDirectory::commit() {
   }
   const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
   return fsync_path(parent, parent.string());
+}
+
+bool manifest_format_is(const fs::path& dir, std::string_view format) {
+  std::ifstream f(dir / "manifest.json");
+  if (!f) return false;
+  try {
+    return nlohmann::json::parse(f).value("format", "") == format;
+  } catch (const nlohmann::json::exception&) {
+    return false;
+  }
 }
 
 }  // namespace r1

@@ -31,7 +31,9 @@ Scene make_scene(const Epoch& e) {
     s.radius[i] = e.encoding.radius[i].to_double();
     s.phi[i] = e.focus.phi[i].to_double();
     const auto& c = e.encoding.color[i];
-    s.color[i] = Vec3{srgb8_to_linear(c[0]), srgb8_to_linear(c[1]), srgb8_to_linear(c[2])} * brightness(n * s.phi[i]);
+    s.color[i] = Vec3{static_cast<double>(srgb8_to_linear(c[0])), static_cast<double>(srgb8_to_linear(c[1])),
+                      static_cast<double>(srgb8_to_linear(c[2]))} *
+                 brightness(n * s.phi[i]);
     s.label[i] = i < e.titles.size() && !e.titles[i].empty() ? e.titles[i] : hemera::to_hex(e.ids[i]).substr(0, 8);
     s.u5[i] = e.spectrum.u[3].empty() ? 0.0 : e.spectrum.u[3][i].to_double();
     phi_total += s.phi[i];

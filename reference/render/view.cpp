@@ -12,28 +12,6 @@ namespace r1::render {
 
 namespace {
 
-// A decimal given as an integer or as a string "12.5" / "-0.25" (R1-RND-005: the TOML subset of
-// R1-IN-005 has no floats). No exponent, no inf or nan.
-std::optional<double> number_of(const toml::node& n) {
-  if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
-  const auto* s = n.as_string();
-  if (!s) return std::nullopt;
-  const std::string& t = s->get();
-  std::size_t k = (!t.empty() && (t[0] == '-' || t[0] == '+')) ? 1 : 0;
-  const std::size_t int_start = k;
-  while (k < t.size() && t[k] >= '0' && t[k] <= '9') ++k;
-  if (k == int_start) return std::nullopt;
-  if (k < t.size() && t[k] == '.') {
-    const std::size_t frac = ++k;
-    while (k < t.size() && t[k] >= '0' && t[k] <= '9') ++k;
-    if (k == frac) return std::nullopt;
-  }
-  if (k != t.size() || t.size() > 40) return std::nullopt;
-  double v = 0;
-  const char* first = t.data() + (t[0] == '+' ? 1 : 0);
-  if (std::from_chars(first, t.data() + t.size(), v).ec != std::errc()) return std::nullopt;
-  return v;
-}
 
 std::string decimal(double v) {
   std::ostringstream o;
@@ -142,7 +120,7 @@ Result<View> parse_view(std::string_view text, const std::string& name) {
   View v;
   const auto at = [&](const toml::node& n) { return name + ":" + std::to_string(n.source().begin.line); };
   const auto num = [&](const toml::node& n, double& out) -> Status {
-    const auto d = number_of(n);
+    const auto d = toml_subset::decimal(n);
     if (!d) return Status::input(at(n) + ": expected a number (an integer or a decimal string such as \"12.5\")");
     out = *d;
     return Status::ok();

@@ -3,6 +3,7 @@
 #include "toml_subset.hpp"
 
 #include <cctype>
+#include <charconv>
 
 #include "text_util.hpp"
 
@@ -184,6 +185,27 @@ Result<toml::table> parse(std::string_view text, const std::string& name, std::s
     return Status::input(name + ":" + std::to_string(first_line + (line > 0 ? line - 1 : 0)) + ": " +
                          std::string(e.description()));
   }
+}
+
+std::optional<double> decimal(const toml::node& n) {
+  if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
+  const auto* s = n.as_string();
+  if (!s) return std::nullopt;
+  const std::string& t = s->get();
+  std::size_t k = (!t.empty() && (t[0] == '-' || t[0] == '+')) ? 1 : 0;
+  const std::size_t int_start = k;
+  while (k < t.size() && t[k] >= '0' && t[k] <= '9') ++k;
+  if (k == int_start) return std::nullopt;
+  if (k < t.size() && t[k] == '.') {
+    const std::size_t frac = ++k;
+    while (k < t.size() && t[k] >= '0' && t[k] <= '9') ++k;
+    if (k == frac) return std::nullopt;
+  }
+  if (k != t.size() || t.size() > 40) return std::nullopt;
+  double v = 0;
+  const char* first = t.data() + (t[0] == '+' ? 1 : 0);
+  if (std::from_chars(first, t.data() + t.size(), v).ec != std::errc()) return std::nullopt;
+  return v;
 }
 
 }  // namespace r1::toml_subset

@@ -21,6 +21,8 @@ class AtomicDirectory {
 
   Status open();
   Status write(const std::string& name, std::string_view bytes);  // one file, flushed
+  // The temporary directory after open(), for writers that make their own files there (images).
+  const std::filesystem::path& temp_path() const { return temp_; }
   Status commit();
 
  private:
@@ -28,5 +30,9 @@ class AtomicDirectory {
   std::function<bool(const std::filesystem::path&)> replaceable_;
   bool committed_ = false;
 };
+
+// True when `dir` holds a manifest.json whose "format" is `format`: the test of whether r1 wrote
+// a directory (an epoch, a golden set) and may replace it.
+bool manifest_format_is(const std::filesystem::path& dir, std::string_view format);
 
 }  // namespace r1

@@ -1,0 +1,26 @@
+// The adapters built into every r1 (R1-BKD-020..023): reference, parallel, null and the
+// self-test backends that break one contract each. Internal to backends/.
+#pragma once
+
+#include <memory>
+#include <string_view>
+
+#include "r1/backends/backend.hpp"
+
+namespace r1::backends {
+
+// The reference stages; `parallel` turns on the TBB row loops of the spectral and focus stages,
+// which give the same bits (R1-SPEC-071, R1-FOC-090); `fp64` runs the spectral and focus stages
+// in IEEE doubles (R1-EPO-003), the second numeric domain: within the bounds, not the same bits.
+std::unique_ptr<Backend> make_reference_backend(bool parallel, bool fp64 = false);
+
+// Well-formed, deliberately wrong results at every stage (R1-BKD-021).
+std::unique_ptr<Backend> make_null_backend();
+
+// The reference with one fault injected (R1-BKD-022): each must fail exactly the check it names.
+enum class SelfTestFault { kPosition, kTopology, kHue };
+std::string_view self_test_name(SelfTestFault f);
+std::string_view self_test_summary(SelfTestFault f);
+std::unique_ptr<Backend> make_self_test_backend(SelfTestFault f);
+
+}  // namespace r1::backends

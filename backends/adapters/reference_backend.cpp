@@ -1,0 +1,89 @@
+// The reference adapter (R1-BKD-020): every stage is the cpu-reference's own function.
+#include <optional>
+
+#include "adapters.hpp"
+#include "r1/reference/encoding.hpp"
+#include "r1/reference/frame.hpp"
+#include "r1/reference/hierarchy.hpp"
+#include "render/scene.hpp"
+
+namespace r1::backends {
+
+namespace {
+
+class ReferenceBackend final : public Backend {
+ public:
+  ReferenceBackend(bool parallel, bool fp64) : parallel_(parallel), fp64_(fp64) {}
+
+  std::string_view name() const override { return fp64_ ? "fp64" : (parallel_ ? "parallel" : "reference"); }
+  std::string_view summary() const override {
+    if (fp64_) return "reference stages with spectral and focus in IEEE doubles (R1-EPO-003)";
+    return parallel_ ? "reference stages with TBB row loops (same bits)" : "the single-threaded cpu-reference";
+  }
+  bool deterministic_mode() const override { return true; }
+  // The canonical epoch is Q32 (fp64 for the fp64 backend's spectral and focus stages); the frame
+  // is fp64 either way (pixels are not canonical, R-1.0 12.3).
+  Domain numeric_domain() const override { return fp64_ ? Domain::kFp64 : Domain::kFixedQ32; }
+
+  Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) override {
+    ++calls_.spectral;
+    EpochOptions mine = o;
+    mine.parallel = parallel_;
+    if (fp64_) mine.domain = NumericDomain::kFp64;
+    return reference_spectral_stage(g, mine, p);
+  }
+  Result<Focus<Q32>> focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) override {
+    ++calls_.focus;
+    EpochOptions mine = o;
+    mine.parallel = parallel_;
+    if (fp64_) mine.domain = NumericDomain::kFp64;
+    return reference_focus_stage(g, mine, lambda2, p);
+  }
+  Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) override {
+    ++calls_.frame;
+    return compute_frame(s, c, a, an);
+  }
+  Result<Encoding> encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
+                            const EncodingOptions& o, const ProgressFn& p) override {
+    ++calls_.encoding;
+    return encode(s, g, f, c, o, nullptr, p);
+  }
+  Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
+                              std::span<const Color> color, std::span<const ParticleId> ids,
+                              const HierarchyOptions& o, const ProgressFn& p) override {
+    ++calls_.hierarchy;
+    return build_hierarchy(pos, phi, color, ids, o, p);
+  }
+  Result<render::Image> render(const Epoch& e, const render::View& v, const render::RenderOptions& o,
+                               render::FrameStats* stats) override {
+    ++calls_.render;
+    // The scene is built once per epoch and reused across views. It borrows the epoch's
+    // hierarchy, so the key includes that storage's address besides the epoch's own and its
+    // snapshot digest: a different epoch never reuses a stale scene.
+    const Key key{&e, e.hierarchy.levels[0].data(), e.snapshot_digest};
+    if (!scene_ || !(key_ == key)) {
+      scene_ = render::make_scene(e);
+      key_ = key;
+    }
+    return render::render_frame(*scene_, v, o, stats);
+  }
+
+ private:
+  struct Key {
+    const Epoch* epoch = nullptr;
+    const ClusterNode* nodes = nullptr;
+    hemera::Digest digest{};
+    bool operator==(const Key&) const = default;
+  };
+  bool parallel_, fp64_;
+  std::optional<render::Scene> scene_;
+  Key key_;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_reference_backend(bool parallel, bool fp64) {
+  return std::make_unique<ReferenceBackend>(parallel, fp64);
+}
+
+}  // namespace r1::backends

@@ -1,0 +1,274 @@
+// Suite runs, comparisons and golden sets (R1-CONF-030..046).
+#include "r1/conformance/harness.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "r1/reference/atomic_dir.hpp"
+#include "r1/reference/hierarchy.hpp"
+
+namespace r1::conformance {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::array<float, 3> linear_background(const render::View& v) {
+  return {render::srgb8_to_linear(v.background[0]), render::srgb8_to_linear(v.background[1]),
+          render::srgb8_to_linear(v.background[2])};
+}
+
+Result<std::string> read_all(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  if (!f) return Status::input(p.string() + ": cannot open");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
+
+// Topology bytes back into the parts compare() reads: per level the clusters' parents and
+// children and every particle's cluster (R1-CONF-010).
+Result<Hierarchy> parse_topology(std::string_view b, const std::string& name) {
+  std::size_t at = 0;
+  auto u32 = [&](std::uint32_t& v) {
+    if (b.size() - at < 4) return false;
+    v = 0;
+    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(b[at + i])) << (8 * i);
+    at += 4;
+    return true;
+  };
+  const std::string tag = "r1topo1\n";
+  if (b.substr(0, tag.size()) != tag) return Status::input(name + ": byte 0: not r1 topology bytes");
+  at = tag.size();
+  auto truncated = [&] { return Status::input(name + ": byte " + std::to_string(at) + ": truncated topology"); };
+  std::uint32_t n = 0;
+  if (!u32(n)) return truncated();
+  Hierarchy h;
+  for (int l = 0; l < kLevels; ++l) {
+    std::uint32_t count = 0;
+    if (!u32(count)) return truncated();
+    // Each cluster needs at least 8 bytes: a count larger than the rest of the file is malformed.
+    if (count > (b.size() - at) / 8) return Status::input(name + ": byte " + std::to_string(at) + ": cluster count too large");
+    h.levels[l].resize(count);
+    for (std::uint32_t c = 0; c < count; ++c) {
+      ClusterNode& node = h.levels[l][c];
+      node.level = static_cast<std::uint32_t>(l);
+      node.id = c;
+      std::uint32_t k = 0;
+      if (!u32(node.parent) || !u32(k)) return truncated();
+      if (k > kMaxChildren) return Status::input(name + ": byte " + std::to_string(at) + ": more than 16 children");
+      node.children.resize(k);
+      for (auto& ch : node.children)
+        if (!u32(ch)) return truncated();
+    }
+    if (n > (b.size() - at) / 4) return truncated();
+    h.cluster_of[l].resize(n);
+    for (auto& c : h.cluster_of[l])
+      if (!u32(c)) return truncated();
+  }
+  if (at != b.size()) return Status::input(name + ": byte " + std::to_string(at) + ": trailing bytes");
+  return h;
+}
+
+bool is_golden_dir(const fs::path& dir) { return manifest_format_is(dir, kGoldenFormat); }
+
+}  // namespace
+
+Result<GraphRun> run_graph(backends::Backend& b, const Suite& suite, const SuiteGraph& g, bool keep_images,
+                           const ProgressFn& progress, bool draw) {
+  GraphRun run;
+  run.name = g.name;
+  R1_ASSIGN(const SuiteInput in, make_input(g));
+  auto t0 = std::chrono::steady_clock::now();
+  R1_ASSIGN(run.epoch, backends::run_epoch(b, in.snapshot, in.graph, {}, progress));
+  run.epoch_s = since(t0);
+  t0 = std::chrono::steady_clock::now();
+  render::RenderOptions ro;
+  ro.timings = false;
+  for (const SuiteView& sv : suite.views) {
+    if (!draw) break;
+    R1_ASSIGN(render::Image img, b.render(run.epoch, sv.view, ro, nullptr));
+    if (img.width != sv.view.width || img.height != sv.view.height)
+      return Status::internal(std::string(b.name()) + " rendered " + std::to_string(img.width) + "x" +
+                              std::to_string(img.height) + " for a " + std::to_string(sv.view.width) + "x" +
+                              std::to_string(sv.view.height) + " view");
+    R1_ASSIGN(auto bytes, render::display_srgb8(img, linear_background(sv.view)));
+    run.display.push_back(std::move(bytes));
+    if (keep_images) run.images.push_back(std::move(img));
+  }
+  run.render_s = since(t0);
+  return run;
+}
+
+Expected expected_from(const GraphRun& r) {
+  Expected e;
+  e.name = r.name;
+  e.hierarchy = r.epoch.hierarchy;
+  e.topology = topology_bytes(r.epoch.hierarchy);
+  e.positions = r.epoch.frame.position;
+  e.display = r.display;
+  return e;
+}
+
+Result<GraphComparison> compare(const GraphRun& got, const Expected& want) {
+  GraphComparison c;
+  c.name = got.name;
+  c.topology_equal = topology_bytes(got.epoch.hierarchy) == want.topology;
+  if (!c.topology_equal) {
+    c.topology_difference = topology_difference(got.epoch.hierarchy, want.hierarchy);
+    if (c.topology_difference.empty()) c.topology_difference = "the topology bytes differ";
+  }
+  if (got.epoch.frame.position.size() == want.positions.size()) {
+    c.positions_identical = got.epoch.frame.position == want.positions;
+    R1_ASSIGN(c.position, position_deviation(got.epoch.frame.position, want.positions));
+  } else {
+    // A different particle count cannot meet any position bound.
+    c.position.max_over_r = std::numeric_limits<double>::infinity();
+  }
+  if (got.display.empty()) return c;  // not drawn: topology and positions only
+  if (got.display.size() != want.display.size())
+    return Status::internal(got.name + ": " + std::to_string(got.display.size()) + " views, expected " +
+                            std::to_string(want.display.size()));
+  for (std::size_t v = 0; v < got.display.size(); ++v) {
+    if (got.display[v].size() != want.display[v].size())
+      return Status::input(got.name + ": view " + std::to_string(v + 1) + ": image sizes differ");
+    const int pixels = static_cast<int>(got.display[v].size() / 3);
+    // Every suite image is width x height; the stats only need the pixel count, so 1 row suffices
+    // when the width is unknown here.
+    c.views.push_back(render::diff_srgb8(got.display[v], want.display[v], pixels, 1, {}, nullptr));
+  }
+  return c;
+}
+
+std::string describe(const GraphComparison& c) {
+  char buf[256];
+  double worst = 0, max_px = 0;
+  for (const auto& v : c.views) {
+    worst = std::max(worst, v.mean_2000);
+    max_px = std::max(max_px, v.max_2000);
+  }
+  std::string s = c.name + ": topology " + (c.topology_equal ? "same" : "CHANGED (" + c.topology_difference + ")");
+  std::snprintf(buf, sizeof buf, "; positions %s (max %.3g R_scene); images: worst view mean dE00 %.3f, max pixel %.2f",
+                c.positions_identical ? "same" : "CHANGED", c.position.max_over_r, worst, max_px);
+  return s + buf;
+}
+
+bool reproduces(const GraphComparison& c) {
+  if (!c.topology_equal || !c.positions_identical) return false;
+  for (const auto& v : c.views)
+    if (v.mean_2000 > kPixelBound) return false;
+  return true;
+}
+
+Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const fs::path& dir) {
+  AtomicDirectory out(dir, is_golden_dir);
+  R1_TRY(out.open());
+  json m;
+  m["format"] = kGoldenFormat;
+  m["generator"] = "r1 golden (backend reference)";
+  m["suite"] = {{"name", suite.name}, {"file", "suite.toml"}, {"digest", hex(hemera::hash(suite.text))},
+                {"width", suite.width}, {"height", suite.height}};
+  R1_TRY(out.write("suite.toml", suite.text));
+  json graphs = json::array();
+  for (std::size_t gi = 0; gi < runs.size(); ++gi) {
+    const GraphRun& r = runs[gi];
+    const std::string topo = topology_bytes(r.epoch.hierarchy);
+    const std::string pos = position_bytes(r.epoch.frame.position);
+    R1_TRY(out.write(r.name + ".topology.bin", topo));
+    R1_TRY(out.write(r.name + ".positions.bin", pos));
+    json g = {{"name", r.name},
+              {"gen", suite.graphs[gi].gen},
+              {"particles", r.epoch.ids.size()},
+              {"snapshot_digest", hex(r.epoch.snapshot_digest)},
+              {"topology", {{"file", r.name + ".topology.bin"}, {"digest", hex(hemera::hash(topo))}}},
+              {"hierarchy_digest", hex(hierarchy_digest(r.epoch.hierarchy))},
+              {"positions", {{"file", r.name + ".positions.bin"}, {"digest", hex(hemera::hash(pos))}}}};
+    json views = json::array();
+    for (std::size_t v = 0; v < suite.views.size(); ++v) {
+      const std::string base = r.name + "." + suite.views[v].name;
+      const render::View& view = suite.views[v].view;
+      R1_TRY(render::write_image(r.images.at(v), out.temp_path() / (base + ".png"), linear_background(view)));
+      R1_TRY(render::write_image(r.images.at(v), out.temp_path() / (base + ".exr"), linear_background(view)));
+      R1_ASSIGN(const std::string png, read_all(out.temp_path() / (base + ".png")));
+      views.push_back({{"name", suite.views[v].name},
+                       {"png", base + ".png"},
+                       {"png_digest", hex(hemera::hash(png))},
+                       {"exr", base + ".exr"}});
+    }
+    g["views"] = std::move(views);
+    graphs.push_back(std::move(g));
+  }
+  m["graphs"] = std::move(graphs);
+  R1_TRY(out.write("manifest.json", m.dump(2) + "\n"));
+  return out.commit();
+}
+
+Result<GoldenSet> read_golden(const fs::path& dir) {
+  GoldenSet set;
+  const std::string mpath = (dir / "manifest.json").string();
+  R1_ASSIGN(const std::string mtext, read_all(dir / "manifest.json"));
+  json m;
+  try {
+    m = json::parse(mtext);
+  } catch (const json::exception& e) {
+    return Status::input(mpath + ": malformed manifest: " + e.what());
+  }
+  if (!m.is_object() || m.value("format", "") != kGoldenFormat) return Status::input(mpath + ": not an r1 golden manifest");
+  try {
+    R1_ASSIGN(const std::string stext, read_all(dir / "suite.toml"));
+    if (hex(hemera::hash(stext)) != m.at("suite").at("digest").get<std::string>())
+      return Status::input((dir / "suite.toml").string() + ": digest does not match the manifest");
+    R1_ASSIGN(set.suite, parse_suite(stext, (dir / "suite.toml").string()));
+    const json& graphs = m.at("graphs");
+    if (!graphs.is_array() || graphs.size() != set.suite.graphs.size())
+      return Status::input(mpath + ": graphs do not match suite.toml");
+    for (std::size_t gi = 0; gi < graphs.size(); ++gi) {
+      const json& g = graphs[gi];
+      Expected e;
+      e.name = g.at("name").get<std::string>();
+      if (e.name != set.suite.graphs[gi].name) return Status::input(mpath + ": graph " + e.name + " is not the suite's");
+      const std::string tfile = g.at("topology").at("file").get<std::string>();
+      R1_ASSIGN(e.topology, read_all(dir / tfile));
+      if (hex(hemera::hash(e.topology)) != g.at("topology").at("digest").get<std::string>())
+        return Status::input((dir / tfile).string() + ": digest does not match the manifest");
+      R1_ASSIGN(e.hierarchy, parse_topology(e.topology, (dir / tfile).string()));
+      const std::string pfile = g.at("positions").at("file").get<std::string>();
+      R1_ASSIGN(const std::string pos, read_all(dir / pfile));
+      if (hex(hemera::hash(pos)) != g.at("positions").at("digest").get<std::string>())
+        return Status::input((dir / pfile).string() + ": digest does not match the manifest");
+      R1_ASSIGN(e.positions, parse_position_bytes(pos, (dir / pfile).string()));
+      const json& views = g.at("views");
+      if (!views.is_array() || views.size() != set.suite.views.size())
+        return Status::input(mpath + ": " + e.name + ": views do not match suite.toml");
+      for (std::size_t v = 0; v < views.size(); ++v) {
+        const fs::path png = dir / views[v].at("png").get<std::string>();
+        R1_ASSIGN(const std::string bytes, read_all(png));
+        if (hex(hemera::hash(bytes)) != views[v].at("png_digest").get<std::string>())
+          return Status::input(png.string() + ": digest does not match the manifest");
+        int w = 0, h = 0;
+        R1_ASSIGN(auto px, render::read_srgb8(png, &w, &h, set.suite.views[v].view.background));
+        if (w != set.suite.width || h != set.suite.height)
+          return Status::input(png.string() + ": " + std::to_string(w) + "x" + std::to_string(h) + ", expected " +
+                               std::to_string(set.suite.width) + "x" + std::to_string(set.suite.height));
+        e.display.push_back(std::move(px));
+      }
+      set.graphs.push_back(std::move(e));
+    }
+  } catch (const json::exception& ex) {
+    return Status::input(mpath + ": malformed manifest: " + ex.what());
+  }
+  return set;
+}
+
+}  // namespace r1::conformance

@@ -1,0 +1,44 @@
+// The comparisons of R-1.0 section 15 (spec/conformance.md R1-CONF-010..032): topology as
+// canonical bytes, position deviation in units of R_scene, pixels as CIEDE2000 of the display
+// images. Shared by `r1 conform`, `r1 golden`, the property library and the differential fuzzer.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "r1/fixedpoint/hemera.hpp"
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1::conformance {
+
+// R-1.0 12.2 / 15.2: epsilon_X = 1e-3 R_scene. 15.3: mean Delta E <= 2.
+inline constexpr double kPositionBound = 1e-3;
+inline constexpr double kPixelBound = 2.0;
+
+// The topology of R-1.0 12.1 as canonical bytes (R1-CONF-010): per level, the cluster count, then
+// per cluster in id order its parent and children, then every particle's cluster id. Positions
+// (AABBs), focus sums and colours are left out: they are held by P_RENDER_POS, not by the strict
+// topology check, and may differ within their bounds.
+std::string topology_bytes(const Hierarchy& h);
+hemera::Digest topology_digest(const Hierarchy& h);
+
+// The first difference between two topologies, in words ("level 0: particle 17 is in cluster 3,
+// expected 4"); empty when they are the same.
+std::string topology_difference(const Hierarchy& got, const Hierarchy& want);
+
+// max_p ||X_got(p) - X_want(p)||_2 / R_scene (R1-CONF-020), and the particle where it is reached.
+// Different particle counts are an input error.
+struct PositionDeviation {
+  double max_over_r = 0;
+  std::uint32_t worst = 0;
+};
+Result<PositionDeviation> position_deviation(const std::vector<std::array<Q32, 3>>& got,
+                                             const std::vector<std::array<Q32, 3>>& want);
+
+// Positions as canonical bytes: n, then x, y, z raws per particle, little-endian (R1-CONF-021).
+std::string position_bytes(const std::vector<std::array<Q32, 3>>& pos);
+Result<std::vector<std::array<Q32, 3>>> parse_position_bytes(std::string_view bytes, const std::string& name);
+
+}  // namespace r1::conformance

@@ -1,0 +1,100 @@
+// The backend registry (R1-BKD-001..005): the built backends by name, the environment override,
+// and the error for a name that is not built.
+#include "r1/backends/registry.hpp"
+
+#include <array>
+#include <cstdlib>
+
+#include "adapters/adapters.hpp"
+
+namespace r1::backends {
+
+std::string_view domain_name(Domain d) {
+  switch (d) {
+    case Domain::kFp32: return "FP32";
+    case Domain::kFp64: return "FP64";
+    case Domain::kFixedQ32: return "FixedQ32";
+    case Domain::kGoldilocks: return "Goldilocks";
+  }
+  return "?";
+}
+
+const std::vector<BackendInfo>& registered_backends() {
+  // Built once; the order is the listing order of `r1 backends` and the differential fuzzer's.
+  static const std::vector<BackendInfo> all = [] {
+    std::vector<BackendInfo> v;
+    v.push_back({"reference", "the cpu-reference: single-threaded, Q32 epoch, fp64 frame (the oracle)", true,
+                 [] { return make_reference_backend(false); }});
+    v.push_back({"parallel", "the reference stages with TBB row loops in spectral and focus (R1-SPEC-071, R1-FOC-090)",
+                 true, [] { return make_reference_backend(true); }});
+    // Not expected to conform: where eigenvalues repeat (ring, torus) the fp64 and Q32 solvers
+    // return different bases of the same eigenspace, so positions and topology differ (README).
+    v.push_back({"fp64", "the reference stages with spectral and focus in IEEE doubles (R1-EPO-003)", false,
+                 [] { return make_reference_backend(false, true); }});
+    v.push_back({"null", "well-formed but wrong results: the suite must fail it", false, [] { return make_null_backend(); }});
+    for (SelfTestFault f : {SelfTestFault::kPosition, SelfTestFault::kTopology, SelfTestFault::kHue}) {
+      v.push_back({std::string(self_test_name(f)), std::string(self_test_summary(f)), false,
+                   [f] { return make_self_test_backend(f); }});
+    }
+    return v;
+  }();
+  return all;
+}
+
+bool is_known_unbuilt(std::string_view name) {
+  // 13.2-13.3 and DESIGN.md name these; none is built yet.
+  static constexpr std::array<std::string_view, 7> planned{"cpu", "vulkan", "cuda", "honeycrisp", "wgpu", "webgpu",
+                                                           "vulkan-native"};
+  for (auto p : planned)
+    if (p == name) return true;
+  return false;
+}
+
+namespace {
+std::string built_names() {
+  std::string s;
+  for (const auto& b : registered_backends()) s += (s.empty() ? "" : ", ") + b.name;
+  return s;
+}
+}  // namespace
+
+Result<std::unique_ptr<Backend>> make_backend(std::string_view name) {
+  for (const auto& b : registered_backends())
+    if (b.name == name) return b.make();
+  if (is_known_unbuilt(name))
+    return Status::input("backend '" + std::string(name) + "' is not built in this r1 (built: " + built_names() + ")");
+  return Status::input("unknown backend '" + std::string(name) + "' (built: " + built_names() + ")");
+}
+
+std::string choose_backend_name(std::string_view requested, std::string* source) {
+  if (!requested.empty()) {
+    if (source) *source = "--backend";
+    return std::string(requested);
+  }
+  const char* env = std::getenv(kBackendEnv);
+  if (env && *env) {
+    if (source) *source = kBackendEnv;
+    return env;
+  }
+  if (source) *source = "default";
+  return "reference";
+}
+
+Result<Epoch> run_epoch(Backend& b, const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
+                        const ProgressFn& progress) {
+  EpochStages st;
+  st.spectral = [&b](const Graph& g, const EpochOptions& o, const ProgressFn& p) { return b.spectral(g, o, p); };
+  st.focus = [&b](const Graph& g, const EpochOptions& o, double l2, const ProgressFn& p) { return b.focus(g, o, l2, p); };
+  st.frame = [&b](const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) {
+    return b.frame(s, c, a, an);
+  };
+  st.encoding = [&b](const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
+                     const EncodingOptions& o, const ProgressFn& p) { return b.encoding(s, g, f, c, o, p); };
+  st.hierarchy = [&b](const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi, std::span<const Color> col,
+                      std::span<const ParticleId> ids, const HierarchyOptions& o, const ProgressFn& p) {
+    return b.hierarchy(pos, phi, col, ids, o, p);
+  };
+  return r1::run_epoch(snapshot, graph, options, progress, &st);
+}
+
+}  // namespace r1::backends
