@@ -80,3 +80,21 @@ TEST(StatusMessage, ControlBytesAreEscapedSoErrorsStayOneLine) {
 }
 
 }  // namespace
+
+namespace {
+
+// A Result's status read off a temporary, as R1_TRY(make().status()) does, is a value that
+// outlives the temporary (it was once a dangling reference: the suite reader printed garbage).
+r1::Result<int> failing() { return r1::Status::input("the message, long enough to live on the heap for sure"); }
+r1::Status forward() {
+  R1_TRY(failing().status());
+  return r1::Status::ok();
+}
+
+TEST(ResultStatus, StatusOfATemporaryResultOutlivesIt) {
+  const r1::Status s = forward();
+  EXPECT_EQ(s.message(), "the message, long enough to live on the heap for sure");
+  EXPECT_EQ(s.exit_code(), 2);
+}
+
+}  // namespace

@@ -152,3 +152,42 @@ TEST_F(CliConform, AnUnbuiltBackendIsAnErrorAndWritesNothing) {
 }
 
 }  // namespace
+
+namespace {
+
+// Bad suite files (R1-CONF-001..002, R1-ERR-001..003): one line naming the file and what is
+// wrong, exit 2, and no sidecar written.
+TEST(CliConformBadSuite, EachMalformedSuiteIsOneLineExitTwoAndNoSidecar) {
+  const std::string good = r1::test::read_file(r1::test::source_dir() / "spec" / "suites" / "small.toml");
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    const auto at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return s.replace(at, from.size(), to);
+  };
+  struct Case {
+    std::string name, text, expect;
+  };
+  const std::vector<Case> cases{
+      {"no_views", good.substr(0, good.find("[[view]]")), "expected exactly 16 [[view]] entries"},
+      {"bad_gen_option", replace("ring --n 64", "ring --bogus 64"), "unknown generator option '--bogus'"},
+      {"bad_gen_value", replace("ring --n 64", "ring --n -3"), "gen"},
+      {"float_eye", replace("eye = [\"2443.201\"", "eye = [2443.201"), ":"},
+      {"duplicate_name", replace("name = \"ring\"", "name = \"tiny\""), "name 'tiny' is used twice"},
+      {"bad_size", replace("width = 128", "width = 0"), "width, height"},
+      {"truncated", good.substr(0, good.find("[[graph]]") + 5), ":"},
+  };
+  for (const Case& c : cases) {
+    r1::test::TempDir dir;
+    const fs::path suite = dir / (c.name + ".toml");
+    r1::test::write_file(suite, c.text);
+    const auto r = run_cli({"conform", "--suite", suite.string(), "--checks", "topo", "-o", (dir / "c.toml").string()});
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.out << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(suite.string()), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "c.toml")) << c.name;
+  }
+}
+
+}  // namespace

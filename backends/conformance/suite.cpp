@@ -93,7 +93,9 @@ Result<GenParams> parse_gen_words(std::string_view words, const std::string& whe
     }
   }
   // The generator's own validation (ranges, options the kind does not take), without the work.
-  R1_TRY(gen_command_line(p).status());
+  // The generator's own message, placed in the suite file.
+  const Result<std::string> line = gen_command_line(p);
+  if (!line.is_ok()) return Status::input(where + ": " + line.status().message());
   return p;
 }
 

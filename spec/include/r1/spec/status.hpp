@@ -71,10 +71,13 @@ class Result {
 
   bool is_ok() const { return std::holds_alternative<T>(v_); }
   explicit operator bool() const { return is_ok(); }
-  const Status& status() const {
+  const Status& status() const& {
     static const Status kOk;
     return is_ok() ? kOk : std::get<Status>(v_);
   }
+  // On a temporary Result the status is returned by value: a reference into the temporary would
+  // dangle as soon as the full expression ends (`R1_TRY(make().status())` read freed memory).
+  Status status() && { return is_ok() ? Status() : std::get<Status>(std::move(v_)); }
   T& value() & { return std::get<T>(v_); }
   const T& value() const& { return std::get<T>(v_); }
   T&& value() && { return std::get<T>(std::move(v_)); }
