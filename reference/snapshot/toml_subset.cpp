@@ -12,6 +12,9 @@ namespace r1::toml_subset {
 namespace {
 
 constexpr int kMaxDepth = 4;  // nesting of arrays/inline tables on one line
+// Parts of one dotted key or table name: each part is a level of tables in toml++'s tree, so an
+// unbounded count would nest without limit (a fuzzer found 70 levels in one key). r1's files use 3.
+constexpr int kMaxKeyParts = 8;
 
 class LineParser {
  public:
@@ -67,7 +70,8 @@ class LineParser {
     return i_ == start ? "expected a key (letters, digits, '_', '-' or a quoted string)" : std::string();
   }
   std::string key_path() {
-    for (;;) {
+    for (int parts = 1;; ++parts) {
+      if (parts > kMaxKeyParts) return "a dotted key has more than 8 parts";
       if (auto e = key(); !e.empty()) return e;
       ws();
       if (!eat('.')) return {};
