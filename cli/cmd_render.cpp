@@ -93,11 +93,8 @@ Status run_render(const RenderCliOptions& c) {
   if (c.no_labels) base.labels = false;
   if (c.no_field) base.field = false;
   std::vector<render::View> views;
-  // R1-RND-007: the default orbit radius fits the whole scene (every particle's bounding sphere
-  // seen from the focus centroid) into the vertical field of view, with 5% margin.
-  double fit = 1;
-  for (std::uint32_t p = 0; p < scene.n; ++p) fit = std::max(fit, render::length(scene.position[p] - scene.centroid) + scene.radius[p]);
-  const double distance = c.distance > 0 ? c.distance : 1.05 * fit / std::sin(base.camera.fov_deg * render::kPi / 360.0);
+  // R1-RND-007: the default orbit radius fits the whole scene into the vertical field of view.
+  const double distance = c.distance > 0 ? c.distance : render::fit_distance(scene, base.camera.fov_deg);
   if (!c.eye.empty()) {
     render::View v = base;
     const render::Vec3 up = c.up.empty() ? render::Vec3{0, 0, 1} : render::Vec3{c.up[0], c.up[1], c.up[2]};
@@ -130,9 +127,7 @@ Status run_render(const RenderCliOptions& c) {
   progress.finish();
   for (std::size_t k = 0; k < views.size(); ++k) {
     const fs::path path = frame_path(c.out, static_cast<int>(k), static_cast<int>(views.size()));
-    const auto& bg = views[k].background;
-    R1_TRY(render::write_image(images[k], path,
-                               {render::srgb8_to_linear(bg[0]), render::srgb8_to_linear(bg[1]), render::srgb8_to_linear(bg[2])}));
+    R1_TRY(render::write_image(images[k], path, render::srgb8_to_linear(views[k].background)));
     if (!c.quiet) print_stats(path, views[k], stats[k]);
   }
   if (!c.quiet) std::printf("%zu image%s in %.2f s\n", views.size(), views.size() == 1 ? "" : "s", seconds_since(t0));

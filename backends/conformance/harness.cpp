@@ -3,13 +3,12 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/hierarchy.hpp"
+#include "r1/reference/input_file.hpp"
 
 namespace r1::conformance {
 
@@ -18,21 +17,9 @@ using json = nlohmann::json;
 
 namespace {
 
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::array<float, 3> linear_background(const render::View& v) {
-  return {render::srgb8_to_linear(v.background[0]), render::srgb8_to_linear(v.background[1]),
-          render::srgb8_to_linear(v.background[2])};
-}
-
 Result<std::string> read_all(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  if (!f) return Status::input(p.string() + ": cannot open");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
+  R1_ASSIGN(const auto in, InputFile::open(p.string()));
+  return std::string(in->text());
 }
 
 std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
@@ -92,7 +79,7 @@ Result<GraphRun> run_graph(backends::Backend& b, const Suite& suite, const Suite
   R1_ASSIGN(const SuiteInput in, make_input(g));
   auto t0 = std::chrono::steady_clock::now();
   R1_ASSIGN(run.epoch, backends::run_epoch(b, in.snapshot, in.graph, {}, progress));
-  run.epoch_s = since(t0);
+  run.epoch_s = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
   render::RenderOptions ro;
   ro.timings = false;
@@ -103,11 +90,11 @@ Result<GraphRun> run_graph(backends::Backend& b, const Suite& suite, const Suite
       return Status::internal(std::string(b.name()) + " rendered " + std::to_string(img.width) + "x" +
                               std::to_string(img.height) + " for a " + std::to_string(sv.view.width) + "x" +
                               std::to_string(sv.view.height) + " view");
-    R1_ASSIGN(auto bytes, render::display_srgb8(img, linear_background(sv.view)));
+    R1_ASSIGN(auto bytes, render::display_srgb8(img, render::srgb8_to_linear(sv.view.background)));
     run.display.push_back(std::move(bytes));
     if (keep_images) run.images.push_back(std::move(img));
   }
-  run.render_s = since(t0);
+  run.render_s = seconds_since(t0);
   return run;
 }
 
@@ -198,8 +185,8 @@ Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const
     for (std::size_t v = 0; v < suite.views.size(); ++v) {
       const std::string base = r.name + "." + suite.views[v].name;
       const render::View& view = suite.views[v].view;
-      R1_TRY(render::write_image(r.images.at(v), out.temp_path() / (base + ".png"), linear_background(view)));
-      R1_TRY(render::write_image(r.images.at(v), out.temp_path() / (base + ".exr"), linear_background(view)));
+      R1_TRY(render::write_image(r.images.at(v), out.temp_path() / (base + ".png"), render::srgb8_to_linear(view.background)));
+      R1_TRY(render::write_image(r.images.at(v), out.temp_path() / (base + ".exr"), render::srgb8_to_linear(view.background)));
       R1_ASSIGN(const std::string png, read_all(out.temp_path() / (base + ".png")));
       views.push_back({{"name", suite.views[v].name},
                        {"png", base + ".png"},

@@ -250,6 +250,10 @@ Status write_atomically(const fs::path& path, const std::string& ext, const OIIO
 
 float srgb8_to_linear(std::uint8_t v) { return kSrgbToLinear[v]; }
 
+std::array<float, 3> srgb8_to_linear(const std::array<std::uint8_t, 3>& rgb) {
+  return {kSrgbToLinear[rgb[0]], kSrgbToLinear[rgb[1]], kSrgbToLinear[rgb[2]]};
+}
+
 // R1-RND-082. With m the largest channel and k = kToneKnee (0.8):
 //   m <= k:  identity;
 //   m >  k:  m' = k + (1 - k) * d / (d + (1 - k)),  d = m - k,

@@ -31,6 +31,8 @@ struct Image {
 
 // Display sRGB code value (0..255) -> linear light, the exact IEC 61966-2-1 curve.
 float srgb8_to_linear(std::uint8_t v);
+// The same per channel: a display sRGB colour (a view's background) as linear RGB.
+std::array<float, 3> srgb8_to_linear(const std::array<std::uint8_t, 3>& rgb);
 
 // The tone map for display (R1-RND-082): linear values above display white roll off smoothly.
 // Applied to the colour's largest channel, so hue is kept. Identity below the knee.

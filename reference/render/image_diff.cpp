@@ -212,9 +212,7 @@ Result<std::vector<std::uint8_t>> read_srgb8(const fs::path& path, int* width, i
       d[0] = s[ir], d[1] = s[ig], d[2] = s[ib];
       d[3] = ia >= 0 ? s[ia] : 1.0f;  // no alpha channel: opaque
     }
-    const std::array<float, 3> bg = {srgb8_to_linear(background[0]), srgb8_to_linear(background[1]),
-                                     srgb8_to_linear(background[2])};
-    auto rgb = display_srgb8(image, bg);
+    auto rgb = display_srgb8(image, srgb8_to_linear(background));
     if (!rgb) return rgb.status().with_prefix(where);
     out = std::move(rgb).value();
   }

@@ -95,4 +95,10 @@ Scene make_scene(const Epoch& e) {
   return s;
 }
 
+double fit_distance(const Scene& s, double fov_deg) {
+  double fit = 1;
+  for (std::uint32_t p = 0; p < s.n; ++p) fit = std::max(fit, length(s.position[p] - s.centroid) + s.radius[p]);
+  return 1.05 * fit / std::sin(fov_deg * kPi / 360.0);
+}
+
 }  // namespace r1::render

@@ -46,4 +46,8 @@ double brightness(double n_phi);
 
 Scene make_scene(const Epoch& e);
 
+// R1-RND-007: the camera distance from the focus centroid at which every particle's bounding
+// sphere fits the vertical field of view `fov_deg`, with 5% margin (the default orbit radius).
+double fit_distance(const Scene& s, double fov_deg);
+
 }  // namespace r1::render
