@@ -54,6 +54,30 @@ double pure_tinf_distance(const render::Scene& s, const render::View& v) {
   return 2.0 * r * focal / (v.tiers.t3 - v.tiers.band) * 1.05 + extent;
 }
 
+// The mean CIEDE2000 of two display sRGB frames of `v` over the pixels either frame covers (bytes
+// other than the background's), R1-CONF-063. A far view covers a few percent of the frame, so the
+// mean over every pixel would let a frame that draws nothing pass; over the covered pixels it
+// cannot. A reference frame that covers nothing makes the comparison empty: an internal error.
+Result<double> covered_mean_2000(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& want,
+                                 const render::View& v) {
+  std::vector<float> heat;
+  render::diff_srgb8(a, want, v.width, v.height, {}, &heat);
+  auto background_at = [&](const std::vector<std::uint8_t>& img, std::size_t p) {
+    return img[3 * p] == v.background[0] && img[3 * p + 1] == v.background[1] && img[3 * p + 2] == v.background[2];
+  };
+  double sum = 0;
+  std::size_t covered = 0, want_covered = 0;
+  for (std::size_t p = 0; p < heat.size(); ++p) {
+    const bool w = !background_at(want, p);
+    want_covered += w ? 1 : 0;
+    if (!w && background_at(a, p)) continue;
+    ++covered;
+    sum += static_cast<double>(heat[p]);
+  }
+  if (want_covered == 0) return Status::internal("conform: the reference's T-infinity frame draws nothing");
+  return sum / static_cast<double>(covered);
+}
+
 Result<Epoch> generated_epoch(backends::Backend& b, std::int64_t n) {
   GenParams p;
   p.kind = GenKind::kBa;
@@ -264,7 +288,8 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       const std::array<float, 3> bg = render::srgb8_to_linear(v.background);
       R1_ASSIGN(const auto a, render::display_srgb8(got, bg));
       R1_ASSIGN(const auto b, render::display_srgb8(want, bg));
-      tinf_worst = std::max(tinf_worst, render::diff_srgb8(a, b, v.width, v.height, {}, nullptr).mean_2000);
+      R1_ASSIGN(const double covered_mean, covered_mean_2000(a, b, v));
+      tinf_worst = std::max(tinf_worst, covered_mean);
       times.push_back({e.ids.size(), s});
       say("tinf: " + std::to_string(e.ids.size()) + " particles: " + g3(s) + " s");
       return Status::ok();
@@ -291,7 +316,7 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
     rep.results.push_back({Check::kTinf, spread <= 0.10 && tinf_worst <= kPixelBound,
                            "pure T-infinity " + std::to_string(o.tinf_width) + "x" + std::to_string(o.tinf_height) +
                                " frame times (particles: time) " + list + "; spread " + fixed(100 * spread, 0) +
-                               "%, bound 10%; frames against the reference's: worst mean dE00 " + fixed(tinf_worst, 3) +
+                               "%, bound 10%; frames against the reference's: worst mean dE00 over covered pixels " + fixed(tinf_worst, 3) +
                                "; R-1.0 names 10^6 vs 10^9, this machine holds the sizes listed"});
   }
   return rep;
