@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace r1::render {
 
@@ -41,6 +42,12 @@ bool sphere_visible(const Frustum& fr, const Vec3& c, double r) {
 
 namespace {
 
+double l1(const Vec3& a) { return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z); }
+
+// The rounding allowance of a plane or depth test over coordinates of this magnitude: a member the
+// per-particle test would keep is never culled or misclassified by a box test (R1-RND-023, 025).
+double slack_of(double magnitude) { return 1e-9 * (1.0 + magnitude); }
+
 // A box grown by g: wholly outside a plane when its corner farthest along the normal is outside
 // by more than g.
 bool box_outside(const Frustum& fr, const Vec3& lo, const Vec3& hi, double g) {
@@ -49,11 +56,23 @@ bool box_outside(const Frustum& fr, const Vec3& lo, const Vec3& hi, double g) {
     const Vec3 far{nrm.x >= 0 ? hi.x : lo.x, nrm.y >= 0 ? hi.y : lo.y, nrm.z >= 0 ? hi.z : lo.z};
     // The slack covers the rounding of the two dot products, so a member the leaf test would keep
     // is never culled here (the walk must equal the brute-force test, R1-RND-023).
-    const double slack = 1e-9 * (1.0 + std::fabs(fr.offset[k]) + std::fabs(far.x) + std::fabs(far.y) + std::fabs(far.z));
-    if (dot(nrm, far) + fr.offset[k] < -g - slack) return true;
+    if (dot(nrm, far) + fr.offset[k] < -g - slack_of(std::fabs(fr.offset[k]) + l1(far))) return true;
   }
   return false;
 }
+
+// Whether every point of the box lies inside every frustum plane (so every member's sphere is
+// visible: its centre is inside).
+bool box_inside(const Frustum& fr, const Vec3& lo, const Vec3& hi) {
+  for (std::size_t k = 0; k < 5; ++k) {
+    const Vec3& nrm = fr.normal[k];
+    const Vec3 near{nrm.x >= 0 ? lo.x : hi.x, nrm.y >= 0 ? lo.y : hi.y, nrm.z >= 0 ? lo.z : hi.z};
+    if (dot(nrm, near) + fr.offset[k] < slack_of(std::fabs(fr.offset[k]) + l1(near))) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 Visible classify(const Scene& s, const View& v, const CameraFrame& f, std::uint32_t p) {
   Visible out;
@@ -65,11 +84,40 @@ Visible classify(const Scene& s, const View& v, const CameraFrame& f, std::uint3
   return out;
 }
 
-}  // namespace
+Rect project_box(const View& v, const CameraFrame& f, const Vec3& lo, const Vec3& hi) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double minx = kInf, miny = kInf, maxx = -kInf, maxy = -kInf;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner{c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
+    const Projected p = project(v, f, corner);
+    if (p.depth <= kNear) return {0, 0, v.width, v.height};
+    minx = std::min(minx, p.px), maxx = std::max(maxx, p.px);
+    miny = std::min(miny, p.py), maxy = std::max(maxy, p.py);
+  }
+  const auto clampi = [](double d, int top) { return static_cast<int>(std::clamp(d, 0.0, static_cast<double>(top))); };
+  return {clampi(std::floor(minx), v.width), clampi(std::floor(miny), v.height), clampi(std::ceil(maxx) + 1, v.width),
+          clampi(std::ceil(maxy) + 1, v.height)};
+}
 
-std::vector<Visible> cull(const Scene& s, const View& v, const CameraFrame& f, CullStats* stats) {
+FarClass far_class(const NodeData& d, const View& v, const CameraFrame& f) {
+  // The box's least and greatest view depth, widened by the rounding of a member's depth.
+  const Vec3& fw = f.forward;
+  const Vec3 o = v.camera.position;
+  const Vec3 near{fw.x >= 0 ? d.lo.x : d.hi.x, fw.y >= 0 ? d.lo.y : d.hi.y, fw.z >= 0 ? d.lo.z : d.hi.z};
+  const Vec3 far{fw.x >= 0 ? d.hi.x : d.lo.x, fw.y >= 0 ? d.hi.y : d.lo.y, fw.z >= 0 ? d.hi.z : d.lo.z};
+  const double slack = slack_of(l1(d.lo) + l1(d.hi) + l1(o));
+  const double depth_min = dot(near - o, fw) - slack, depth_max = dot(far - o, fw) + slack;
+  if (depth_max <= kNear) return FarClass::kBehind;
+  if (!(depth_min > d.max_radius + kNear)) return FarClass::kMixed;
+  // The largest member's size at the least depth bounds every member's (relative rounding 1e-9).
+  const double s_max = screen_diameter(d.max_radius, depth_min, f) * (1 + 1e-9);
+  return s_max <= v.tiers.t3 - v.tiers.band ? FarClass::kFar : FarClass::kMixed;
+}
+
+CullResult cull_frame(const Scene& s, const View& v, const CameraFrame& f, CullStats* stats) {
   const Frustum fr = make_frustum(v, f);
-  std::vector<Visible> out;
+  CullResult result;
+  std::vector<Visible>& out = result.visible;
   CullStats local;
   // Depth-first from every top-level node. A box wholly outside by more than its largest member
   // radius holds no visible sphere (each member's centre lies in the box); the per-particle test at
@@ -86,6 +134,11 @@ std::vector<Visible> cull(const Scene& s, const View& v, const CameraFrame& f, C
       ++local.nodes_culled;
       continue;
     }
+    if (box_inside(fr, d.lo, d.hi) && far_class(d, v, f) == FarClass::kFar) {
+      result.far.push_back({l, id});
+      result.far_particles += d.count;
+      continue;
+    }
     const auto& children = s.hierarchy->levels[static_cast<std::size_t>(l)][id].children;
     if (l == 0) {
       for (std::uint32_t p : children) {
@@ -98,7 +151,17 @@ std::vector<Visible> cull(const Scene& s, const View& v, const CameraFrame& f, C
   }
   std::sort(out.begin(), out.end(), [](const Visible& a, const Visible& b) { return a.particle < b.particle; });
   if (stats) *stats = local;
-  return out;
+  return result;
+}
+
+std::vector<Visible> cull(const Scene& s, const View& v, const CameraFrame& f, CullStats* stats) {
+  CullResult r = cull_frame(s, v, f, stats);
+  for (const FarNode& node : r.far) {
+    for_each_member(s, node.level, node.id, [&](std::uint32_t p) { r.visible.push_back(classify(s, v, f, p)); });
+    if (stats) stats->particles_tested += s.nodes[static_cast<std::size_t>(node.level)][node.id].count;
+  }
+  std::sort(r.visible.begin(), r.visible.end(), [](const Visible& a, const Visible& b) { return a.particle < b.particle; });
+  return std::move(r.visible);
 }
 
 std::vector<Visible> cull_brute_force(const Scene& s, const View& v, const CameraFrame& f) {

@@ -37,9 +37,49 @@ struct Visible {
   Tier tier = Tier::kTinf;
 };
 
+// Particle p's view depth, screen diameter (1e300 when its sphere reaches the near plane) and tier.
+Visible classify(const Scene& s, const View& v, const CameraFrame& f, std::uint32_t p);
+
+// The pixel rectangle [x0, x1) x [y0, y1) that holds every pixel whose centre sees the projection
+// of a box (clamped to the image); the whole image when part of the box lies at or behind the
+// near plane.
+struct Rect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
+Rect project_box(const View& v, const CameraFrame& f, const Vec3& lo, const Vec3& hi);
+
 struct CullStats {
   std::uint64_t nodes_tested = 0, nodes_culled = 0, particles_tested = 0;
 };
+
+// A node's standing in the far field this frame (R1-RND-025), from its box and largest member
+// radius alone, so it costs the same whatever the node holds:
+//  - kFar: every member lies beyond the near plane and projects at or below t3 - band pixels, so
+//    every member is T-infinity with field weight exactly 1 (R1-RND-045);
+//  - kBehind: every member lies at or before the near plane (field weight 0);
+//  - kMixed: neither is certain.
+// The bounds carry a slack covering the rounding of the per-particle depth and size, so kFar and
+// kBehind never claim what the per-particle computation would not give.
+enum class FarClass : std::uint8_t { kMixed = 0, kFar = 1, kBehind = 2 };
+FarClass far_class(const NodeData& d, const View& v, const CameraFrame& f);
+
+// A node of the hierarchy whose members are all visible and kFar: the frame draws it through the
+// field's aggregates and never lists its members (R1-RND-025).
+struct FarNode {
+  int level = 0;
+  std::uint32_t id = 0;
+};
+
+struct CullResult {
+  std::vector<Visible> visible;  // ascending particle order, members of `far` nodes left out
+  std::vector<FarNode> far;      // in walk order
+  std::uint64_t far_particles = 0;  // members of the far nodes
+};
+
+// The frame's cull (R1-RND-025): the hierarchy walk of `cull`, stopping at nodes wholly inside the
+// frustum whose class is kFar. A pure far view costs the nodes walked, not the particles.
+CullResult cull_frame(const Scene& s, const View& v, const CameraFrame& f, CullStats* stats = nullptr);
 
 // Every particle whose bounding sphere is visible, in ascending particle order. The hierarchy walk
 // (R1-RND-023) tests node boxes grown by their largest member radius and skips what lies wholly

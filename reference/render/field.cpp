@@ -64,7 +64,19 @@ struct Accumulator {
 // Every field member of level-0 node `id` within cutoff sigma of x, one kernel each.
 void add_members(const FieldFrame& ff, std::uint32_t id, const Vec3& x, double inv2s2, Accumulator& acc) {
   const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
-  for (std::uint32_t k = ff.member_begin[id]; k < ff.member_begin[id + 1]; ++k) {
+  const std::uint32_t slot = ff.slot[0].empty() ? FieldFrame::kFarSlot : ff.slot[0][id];
+  if (slot == FieldFrame::kBehindSlot) return;
+  if (slot == FieldFrame::kFarSlot) {
+    const Scene& s = *ff.scene;
+    const double n = s.n;
+    for (std::uint32_t q : s.hierarchy->levels[0][id].children) {
+      const double w = n * s.phi[q];
+      if (w > 0) acc.add(w, s.position[q], s.color[q], x, inv2s2, max_q);
+    }
+    return;
+  }
+  const auto [begin, end] = ff.member_range[slot];
+  for (std::uint32_t k = begin; k < end; ++k) {
     const FieldFrame::Member& m = ff.members[k];
     acc.add(m.weight, m.position, m.color, x, inv2s2, max_q);
   }
@@ -78,54 +90,87 @@ double tinf_weight(double s, const Tiers& t) {
   return (t.t3 + t.band - s) / (2 * t.band);
 }
 
+double FieldFrame::weight(std::uint32_t p) const {
+  const Scene& s = *scene;
+  const double depth = dot(s.position[p] - camera, frame.forward);
+  const double sz = depth > s.radius[p] + kNear ? screen_diameter(s.radius[p], depth, frame) : 1e300;
+  return tinf_weight(sz, tiers) * static_cast<double>(s.n) * s.phi[p];
+}
+
+NodeField FieldFrame::node(int level, std::uint32_t id) const {
+  const auto L = static_cast<std::size_t>(level);
+  const std::uint32_t k = slot[L].empty() ? kFarSlot : slot[L][id];
+  if (k == kBehindSlot) return {};
+  if (k != kFarSlot) return mixed[k];
+  const NodeData& d = scene->nodes[L][id];
+  return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent};
+}
+
 FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f, const FieldParams& p) {
   FieldFrame ff;
   ff.scene = &s;
   ff.params = p;
   ff.focal_px = f.focal_px;
-  ff.weight.resize(s.n);
-  const double n = s.n;
-  for (std::uint32_t i = 0; i < s.n; ++i) {
-    const double depth = dot(s.position[i] - v.camera.position, f.forward);
-    const double sz = depth > s.radius[i] + kNear ? screen_diameter(s.radius[i], depth, f) : 1e300;
-    ff.weight[i] = tinf_weight(sz, v.tiers) * n * s.phi[i];
-  }
-  // Node aggregates over the members in the field this frame (weights, centroid, colour, extent).
-  for (std::size_t l = 0; l < kLevels; ++l) {
-    const std::size_t count = s.hierarchy->levels[l].size();
-    ff.node_weight[l].assign(count, 0.0);
-    ff.node_centroid[l].assign(count, Vec3{});
-    ff.node_color[l].assign(count, Vec3{});
-    ff.node_extent[l].assign(count, 0.0);
-  }
-  for (std::uint32_t i = 0; i < s.n; ++i) {
-    if (!(ff.weight[i] > 0)) continue;
-    for (std::size_t l = 0; l < kLevels; ++l) {
-      const std::uint32_t id = s.hierarchy->cluster_of[l][i];
-      ff.node_weight[l][id] += ff.weight[i];
-      ff.node_centroid[l][id] += s.position[i] * ff.weight[i];
-      ff.node_color[l][id] += s.color[i] * ff.weight[i];
+  ff.frame = f;
+  ff.camera = v.camera.position;
+  ff.tiers = v.tiers;
+  // Classify from the top; only kMixed nodes are opened and get aggregates of their own, over
+  // their members with field weight > 0 (weights, centroid, colour, extent; R1-RND-054).
+  // Every node under a kBehind one is marked kBehind too (a walk never opens them, but node()
+  // answers for every node); nothing under a kFar node is visited.
+  struct Entry {
+    int level;
+    std::uint32_t id;
+    bool behind;  // under a kBehind node
+  };
+  std::vector<Entry> stack;
+  auto open = [&](int l, std::uint32_t id, bool behind) {
+    const auto below = static_cast<std::size_t>(l - 1);
+    if (ff.slot[below].empty()) ff.slot[below].assign(s.nodes[below].size(), FieldFrame::kFarSlot);
+    for (std::uint32_t child : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children)
+      stack.push_back({l - 1, child, behind});
+  };
+  const std::size_t top = s.nodes[kLevels - 1].size();
+  ff.slot[kLevels - 1].assign(top, FieldFrame::kFarSlot);
+  for (std::uint32_t id = 0; id < top; ++id) stack.push_back({kLevels - 1, id, false});
+  while (!stack.empty()) {
+    const auto [l, id, under_behind] = stack.back();
+    stack.pop_back();
+    const auto L = static_cast<std::size_t>(l);
+    const FarClass c = under_behind ? FarClass::kBehind : far_class(s.nodes[L][id], v, f);
+    if (c != FarClass::kMixed) {
+      ff.slot[L][id] = c == FarClass::kFar ? FieldFrame::kFarSlot : FieldFrame::kBehindSlot;
+      if (c == FarClass::kBehind && l > 0) open(l, id, true);
+      continue;
     }
-  }
-  for (std::size_t l = 0; l < kLevels; ++l)
-    for (std::size_t id = 0; id < ff.node_weight[l].size(); ++id)
-      if (ff.node_weight[l][id] > 0) {
-        ff.node_centroid[l][id] = ff.node_centroid[l][id] / ff.node_weight[l][id];
-        ff.node_color[l][id] = ff.node_color[l][id] / ff.node_weight[l][id];
+    NodeField nf;
+    for_each_member(s, l, id, [&](std::uint32_t q) {
+      const double w = ff.weight(q);
+      if (!(w > 0)) return;
+      nf.weight += w;
+      nf.centroid += s.position[q] * w;
+      nf.color += s.color[q] * w;
+    });
+    if (nf.weight > 0) {
+      nf.centroid = nf.centroid / nf.weight;
+      nf.color = nf.color / nf.weight;
+      for_each_member(s, l, id, [&](std::uint32_t q) {
+        if (ff.weight(q) > 0) nf.extent = std::max(nf.extent, length(s.position[q] - nf.centroid));
+      });
+    }
+    ff.slot[L][id] = static_cast<std::uint32_t>(ff.mixed.size());
+    ff.mixed.push_back(nf);
+    if (l == 0) {
+      const auto begin = static_cast<std::uint32_t>(ff.members.size());
+      for (std::uint32_t q : s.hierarchy->levels[0][id].children) {
+        const double w = ff.weight(q);
+        if (w > 0) ff.members.push_back({s.position[q], s.color[q], w});
       }
-  for (std::uint32_t i = 0; i < s.n; ++i) {
-    if (!(ff.weight[i] > 0)) continue;
-    for (std::size_t l = 0; l < kLevels; ++l) {
-      const std::uint32_t id = s.hierarchy->cluster_of[l][i];
-      ff.node_extent[l][id] = std::max(ff.node_extent[l][id], length(s.position[i] - ff.node_centroid[l][id]));
+      ff.member_range.resize(ff.mixed.size());
+      ff.member_range.back() = {begin, static_cast<std::uint32_t>(ff.members.size())};
+      continue;
     }
-  }
-  const auto& level0 = s.hierarchy->levels[0];
-  ff.member_begin.assign(level0.size() + 1, 0);
-  for (std::size_t id = 0; id < level0.size(); ++id) {
-    for (std::uint32_t q : level0[id].children)
-      if (ff.weight[q] > 0) ff.members.push_back({s.position[q], s.color[q], ff.weight[q]});
-    ff.member_begin[id + 1] = static_cast<std::uint32_t>(ff.members.size());
+    open(l, id, false);
   }
   const double dist = length(v.camera.position - s.centroid);
   const double g = 1.0 + dist / static_cast<double>(kSceneRadius);
@@ -139,6 +184,24 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
   ff.t_far = std::max(far, 1.0);
   // Grow by the widest kernel at that distance so the tails of the farthest particles are inside.
   ff.t_far += p.cutoff * field_sigma(ff, ff.t_far);
+  // Tile lists of top-level nodes. sigma grows along the ray, so cutoff sigma(t_far) bounds every
+  // ray's grow; a ray meeting the grown ball passes through its projection (R1-RND-057).
+  const double grow = p.cutoff * field_sigma(ff, ff.t_far);
+  ff.width = v.width;
+  ff.tiles_x = (v.width + FieldFrame::kTile - 1) / FieldFrame::kTile;
+  const int tiles_y = (v.height + FieldFrame::kTile - 1) / FieldFrame::kTile;
+  ff.top_by_tile.assign(static_cast<std::size_t>(ff.tiles_x) * static_cast<std::size_t>(tiles_y), {});
+  for (std::uint32_t id = 0; id < top; ++id) {
+    const NodeField nd = ff.node(kLevels - 1, id);
+    if (nd.weight <= 0) continue;
+    const double r = nd.extent + grow;
+    const Rect box = project_box(v, f, nd.centroid - Vec3{r, r, r}, nd.centroid + Vec3{r, r, r});
+    if (box.empty()) continue;
+    const int x0 = std::max(box.x0 - 1, 0) / FieldFrame::kTile, x1 = std::min(box.x1, v.width - 1) / FieldFrame::kTile;
+    const int y0 = std::max(box.y0 - 1, 0) / FieldFrame::kTile, y1 = std::min(box.y1, v.height - 1) / FieldFrame::kTile;
+    for (int ty = y0; ty <= y1; ++ty)
+      for (int tx = x0; tx <= x1; ++tx) ff.top_by_tile[static_cast<std::size_t>(ty * ff.tiles_x + tx)].push_back(id);
+  }
   return ff;
 }
 
@@ -151,8 +214,10 @@ FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {
   const Scene& s = *ff.scene;
   Accumulator acc;
   const double inv = 1.0 / (2 * sigma * sigma);
-  for (std::uint32_t p = 0; p < s.n; ++p)
-    if (ff.weight[p] > 0) acc.add(ff.weight[p], s.position[p], s.color[p], x, inv);
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    const double w = ff.weight(p);
+    if (w > 0) acc.add(w, s.position[p], s.color[p], x, inv);
+  }
   return acc.value(ff.params.kappa, sigma);
 }
 
@@ -167,9 +232,10 @@ FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma)
     const auto [l, id] = stack.back();
     stack.pop_back();
     const auto L = static_cast<std::size_t>(l);
-    if (ff.node_weight[L][id] <= 0 || !within_reach(x, ff.node_centroid[L][id], ff.node_extent[L][id], reach)) continue;
-    if (ff.node_extent[L][id] <= ff.params.theta * sigma) {
-      acc.add(ff.node_weight[L][id], ff.node_centroid[L][id], ff.node_color[L][id], x, inv);
+    const NodeField nd = ff.node(l, id);
+    if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
+    if (nd.extent <= ff.params.theta * sigma) {
+      acc.add(nd.weight, nd.centroid, nd.color, x, inv);
       continue;
     }
     if (l == 0) {
@@ -183,7 +249,7 @@ FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma)
 
 double field_error_bound(const FieldFrame& ff, double sigma) {
   double total = 0;
-  for (double w : ff.weight) total += w;
+  for (std::uint32_t p = 0; p < ff.scene->n; ++p) total += ff.weight(p);
   const double per_weight = 0.5 * ff.params.theta * ff.params.theta + std::exp(-0.5 * ff.params.cutoff * ff.params.cutoff);
   return ff.params.kappa / sigma * total * per_weight;
 }
@@ -202,23 +268,32 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     std::uint32_t id;
     bool aggregate;
     double t0, t1;
+    NodeField node;
   };
   std::vector<Candidate> cands;
   std::vector<std::pair<int, std::uint32_t>> stack;
-  for (std::uint32_t id = 0; id < s.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
+  const std::uint64_t tile = ff.width > 0 ? (pixel / static_cast<std::uint64_t>(ff.width)) / FieldFrame::kTile *
+                                                     static_cast<std::uint64_t>(ff.tiles_x) +
+                                                 (pixel % static_cast<std::uint64_t>(ff.width)) / FieldFrame::kTile
+                                           : 0;
+  if (tile >= ff.top_by_tile.size()) {
+    for (std::uint32_t id = 0; id < s.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
+  } else {
+    for (std::uint32_t id : ff.top_by_tile[tile]) stack.push_back({kLevels - 1, id});
+  }
   double a = t_end, b = kNear;
   while (!stack.empty()) {
     const auto [l, id] = stack.back();
     stack.pop_back();
     if (stats) ++stats->walked;
-    const auto L = static_cast<std::size_t>(l);
-    if (ff.node_weight[L][id] <= 0) continue;  // nothing of it is in the field this frame
+    const NodeField nd = ff.node(l, id);
+    if (nd.weight <= 0) continue;  // nothing of it is in the field this frame
     double t0 = kNear, t1 = t_end;
-    ray_ball(ray, ff.node_centroid[L][id], ff.node_extent[L][id] + grow, t0, t1);
+    ray_ball(ray, nd.centroid, nd.extent + grow, t0, t1);
     if (t0 > t1) continue;
-    const bool aggregate = ff.node_extent[L][id] <= p.theta * field_sigma(ff, t0);
+    const bool aggregate = nd.extent <= p.theta * field_sigma(ff, t0);
     if (aggregate || l == 0) {
-      cands.push_back({l, id, aggregate, t0, t1});
+      cands.push_back({l, id, aggregate, t0, t1, nd});
       a = std::min(a, t0);
       b = std::max(b, t1);
       continue;
@@ -257,10 +332,9 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     Accumulator acc;
     for (const Candidate* cp : active) {
       const Candidate& c = *cp;
-      const auto L = static_cast<std::size_t>(c.level);
-      if (!within_reach(x, ff.node_centroid[L][c.id], ff.node_extent[L][c.id], reach)) continue;
+      if (!within_reach(x, c.node.centroid, c.node.extent, reach)) continue;
       if (c.aggregate) {
-        acc.add(ff.node_weight[L][c.id], ff.node_centroid[L][c.id], ff.node_color[L][c.id], x, inv);
+        acc.add(c.node.weight, c.node.centroid, c.node.color, x, inv);
         continue;
       }
       add_members(ff, c.id, x, inv, acc);

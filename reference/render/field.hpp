@@ -27,28 +27,55 @@ struct FieldValue {
   double weight = 0;   // sum of weight * kernel (for tests)
 };
 
-// What the field of one frame depends on: per particle its T-inf weight (1 below the handoff band,
-// 0 above it, linear across it, R1-RND-045) and per node whether every member has weight 1.
+// A node as the field sees it this frame (R1-RND-054): over its members with field weight > 0,
+// their weight sum (0: skip the node), weighted centroid and colour, and largest distance from it.
+struct NodeField {
+  double weight = 0;
+  Vec3 centroid, color;
+  double extent = 0;
+};
+
+// What the field of one frame depends on (R1-RND-059). Nodes are classified from the top by
+// far_class: a kFar node's members all have weight exactly 1 x n phi, so its aggregates are the
+// scene's (NodeData, computed once per epoch) and nothing below it is visited; a kBehind node
+// weighs 0; only kMixed nodes get aggregates of their own, computed over their members. A pure
+// far view therefore costs the top of the hierarchy, not |P|.
 struct FieldFrame {
+  static constexpr std::uint32_t kFarSlot = 0xFFFFFFFFu, kBehindSlot = 0xFFFFFFFEu;
   const Scene* scene = nullptr;
-  std::vector<double> weight;                            // per particle
-  // Per node, over its members with field weight > 0 this frame (R1-RND-054): the weight sum (0:
-  // skip the node), their weighted centroid and colour, and their largest distance from it.
-  std::array<std::vector<double>, kLevels> node_weight;
-  std::array<std::vector<Vec3>, kLevels> node_centroid, node_color;
-  std::array<std::vector<double>, kLevels> node_extent;
-  // Per level-0 node, its members with field weight > 0, stored together in member order:
-  // members[member_begin[id] .. member_begin[id + 1]).
+  CameraFrame frame;
+  Vec3 camera;
+  Tiers tiers;
+  // Per level, per node: kFarSlot, kBehindSlot or an index into `mixed`. A level is filled only
+  // when some node of it was classified (the top level, and the children of kMixed and kBehind
+  // nodes); an empty level, or an entry left at kFarSlot, lies below a kFar node.
+  std::array<std::vector<std::uint32_t>, kLevels> slot;
+  std::vector<NodeField> mixed;
+  // Per kMixed level-0 node, its members with field weight > 0 in member order:
+  // members[member_range[k].first .. member_range[k].second) for mixed[k].
   struct Member {
     Vec3 position, color;
     double weight = 0;
   };
-  std::vector<std::uint32_t> member_begin;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> member_range;
   std::vector<Member> members;
+  // Per 16 x 16 pixel tile of the view (row-major), the top-level nodes a ray through it may
+  // meet (R1-RND-057): those whose ball, grown by the frame's widest kernel, projects onto the tile
+  // with a pixel to spare. A ray walks only its tile's list, so a pixel far from the scene tests
+  // nothing. Empty: every ray walks every top-level node (the same samples, more tests).
+  static constexpr int kTile = 16;
+  int width = 0, tiles_x = 0;
+  std::vector<std::vector<std::uint32_t>> top_by_tile;
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   double focal_px = 1;
   FieldParams params;
+
+  // Particle p's field weight: its T-infinity weight (1 below the handoff band, 0 above it, linear
+  // across it, R1-RND-045) times n phi(p).
+  double weight(std::uint32_t p) const;
+  // Node `id` of `level` this frame.
+  NodeField node(int level, std::uint32_t id) const;
 };
 
 double tinf_weight(double s, const Tiers& t);
@@ -78,7 +105,9 @@ struct FieldRayStats {
 };
 
 // The stratified, jittered march of 7.2 along `ray` up to t_max (an opaque hit), samples
-// written in ray order. `pixel` keys the counter-based jitter (r1::rng::uniform_double, R1-RND-056).
+// written in ray order. `pixel` = y * width + x of the view: it keys the counter-based jitter
+// (r1::rng::uniform_double, R1-RND-056) and names the tile whose top-level nodes the walk starts
+// from; `ray` is that pixel's ray (pixel_ray at its centre).
 void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64_t pixel, std::vector<FieldSample>& out,
                  FieldRayStats* stats = nullptr);
 

@@ -4,7 +4,10 @@
 // view files, and byte-identical re-renders.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "r1/fixedpoint/counter_rng.hpp"
@@ -249,6 +252,129 @@ TEST(Cull, AViewOfASmallPartTestsFewParticles) {
   EXPECT_LT(cs.particles_tested, s.n / 10) << "the walk should skip most of the graph";
 }
 
+// R1-RND-025: the frame's cull stops at far nodes wholly in view. Listed particles plus the far
+// nodes' members are exactly the brute-force set, and every far member is T-infinity with field
+// weight exactly 1, over near, middle and far views.
+TEST(Cull, FarNodesHoldOnlyVisibleFarParticlesAndCompleteTheBruteForceSet) {
+  const r1::Epoch e = make_epoch(random_cloud(3000, 7), 6, r1::Shape::kSphere);
+  const Scene s = make_scene(e);
+  std::mt19937_64 g(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::uint64_t with_far = 0, mixed_views = 0;
+  for (int k = 0; k < 150; ++k) {
+    View v;
+    v.width = 320 + static_cast<int>(u(g) * 100), v.height = 240;
+    v.camera.fov_deg = 50 + 30 * u(g);
+    const double distance = std::array<double, 3>{900.0, 8000.0, 60000.0}[static_cast<std::size_t>(k % 3)];
+    v.camera.position = normalize(Vec3{u(g), u(g), u(g)}) * distance;
+    const Vec3 target = Vec3{u(g), u(g), u(g)} * 400.0;
+    v.camera.orientation = *look_at(v.camera.position, target, {u(g), u(g), 1});
+    const CameraFrame f = camera_frame(v);
+    const CullResult r = cull_frame(s, v, f);
+    const FieldFrame ff = make_field_frame(s, v, f);
+    std::vector<Visible> all = r.visible;
+    std::uint64_t members = 0;
+    for (const FarNode& node : r.far)
+      for_each_member(s, node.level, node.id, [&](std::uint32_t p) {
+        const Visible vis = classify(s, v, f, p);
+        ASSERT_EQ(vis.tier, Tier::kTinf) << "view " << k << " particle " << p;
+        ASSERT_EQ(tinf_weight(vis.s, v.tiers), 1.0) << "view " << k << " particle " << p;
+        ASSERT_EQ(ff.weight(p), static_cast<double>(s.n) * s.phi[p]);
+        all.push_back(vis);
+        ++members;
+      });
+    EXPECT_EQ(members, r.far_particles);
+    std::sort(all.begin(), all.end(), [](const Visible& a, const Visible& b) { return a.particle < b.particle; });
+    const auto brute = cull_brute_force(s, v, f);
+    ASSERT_EQ(all.size(), brute.size()) << "view " << k;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      ASSERT_EQ(all[i].particle, brute[i].particle);
+      ASSERT_EQ(all[i].s, brute[i].s);
+    }
+    with_far += r.far.empty() ? 0 : 1;
+    mixed_views += !r.far.empty() && !r.visible.empty() ? 1 : 0;
+  }
+  EXPECT_GT(with_far, 40u);    // the far views stop at nodes
+  EXPECT_GT(mixed_views, 5u);  // and some views list particles beside far nodes
+}
+
+// R1-RND-059: the field's node aggregates this frame equal the ones computed from every
+// particle's own weight (R1-RND-054), whether the node is far (the scene's aggregates), behind or
+// mixed (its own), over views from inside the cloud to far away.
+TEST(Field, FrameNodeAggregatesEqualThePerParticleOnes) {
+  const r1::Epoch e = make_epoch(random_cloud(2500, 17), 6, r1::Shape::kSphere);
+  const Scene s = make_scene(e);
+  std::mt19937_64 g(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::array<std::uint64_t, 2> seen{};  // views with some far node, with some mixed node
+  for (int k = 0; k < 60; ++k) {
+    View v;
+    v.width = v.height = 200;
+    const double distance = std::array<double, 4>{10.0, 700.0, 5000.0, 40000.0}[static_cast<std::size_t>(k % 4)];
+    v.camera.position = normalize(Vec3{u(g), u(g), u(g)}) * distance;
+    v.camera.orientation = *look_at(v.camera.position, Vec3{u(g), u(g), u(g)} * 300.0, {0, 0, 1});
+    const CameraFrame f = camera_frame(v);
+    const FieldFrame ff = make_field_frame(s, v, f);
+    bool any_far = false;
+    for (int l = 0; l < r1::kLevels; ++l)
+      for (std::uint32_t id = 0; id < s.nodes[static_cast<std::size_t>(l)].size(); ++id) {
+        double w = 0, extent = 0;
+        Vec3 c, col;
+        for_each_member(s, l, id, [&](std::uint32_t p) {
+          const double wp = ff.weight(p);
+          if (!(wp > 0)) return;
+          w += wp, c += s.position[p] * wp, col += s.color[p] * wp;
+        });
+        if (w > 0) {
+          c = c / w, col = col / w;
+          for_each_member(s, l, id, [&](std::uint32_t p) {
+            if (ff.weight(p) > 0) extent = std::max(extent, length(s.position[p] - c));
+          });
+        }
+        const NodeField nd = ff.node(l, id);
+        const bool far = far_class(s.nodes[static_cast<std::size_t>(l)][id], v, f) == FarClass::kFar;
+        any_far = any_far || far;
+        ASSERT_NEAR(nd.weight, w, 1e-12 * std::max(w, 1.0)) << k << " " << l << " " << id;
+        if (w <= 0) continue;
+        ASSERT_LE(length(nd.centroid - c), 1e-9 * (1 + length(c))) << k << " " << l << " " << id;
+        ASSERT_LE(length(nd.color - col), 1e-12) << k << " " << l << " " << id;
+        ASSERT_NEAR(nd.extent, extent, 1e-9 * (1 + extent)) << k << " " << l << " " << id;
+      }
+    seen[0] += any_far ? 1 : 0;
+    seen[1] += ff.mixed.empty() ? 0 : 1;
+  }
+  EXPECT_GT(seen[0], 10u);
+  EXPECT_GT(seen[1], 10u);
+}
+
+// R1-RND-025, R1-RND-059: a pure far view lists no particle and opens no node of its own, at 2000
+// particles as at 20000; the frame reports every particle at T-infinity.
+TEST(Render, APureFarViewDoesNotVisitParticles) {
+  for (std::size_t n : {2000u, 20000u}) {
+    const r1::Epoch e = make_epoch(random_cloud(n, 23), 6, r1::Shape::kSphere);
+    const Scene s = make_scene(e);
+    View v = lone_view({0, 0, 400000}, 161);
+    v.field = true;
+    const CameraFrame f = camera_frame(v);
+    CullStats cs;
+    const CullResult r = cull_frame(s, v, f, &cs);
+    EXPECT_TRUE(r.visible.empty());
+    EXPECT_EQ(r.far_particles, n);
+    EXPECT_EQ(cs.particles_tested, 0u);
+    EXPECT_LE(cs.nodes_tested, s.nodes[r1::kLevels - 1].size());
+    EXPECT_TRUE(make_field_frame(s, v, f).mixed.empty());
+    FrameStats st;
+    const auto img = render_frame(s, v, {}, &st);
+    ASSERT_TRUE(img.is_ok());
+    EXPECT_EQ(st.tier_count[static_cast<std::size_t>(Tier::kTinf)], n);
+    EXPECT_EQ(st.visible, n);
+    double alpha = 0;
+    for (int y = 0; y < v.height; ++y)
+      for (int x = 0; x < v.width; ++x) alpha += static_cast<double>(img->px(x, y)[3]);
+    EXPECT_GT(alpha, 1.0) << "the far cloud is drawn by the field";
+  }
+}
+
 // ---- the field ----
 
 TEST(Field, HierarchicalEvaluationIsWithinItsBound) {
@@ -270,6 +396,42 @@ TEST(Field, HierarchicalEvaluationIsWithinItsBound) {
     }
   }
   RecordProperty("worst_relative_error", std::to_string(worst));
+}
+
+// R1-RND-057: a ray walks only the top-level nodes binned to its tile, and gets exactly the
+// samples it gets walking them all, over every pixel of views inside, near and far from the cloud.
+TEST(Field, TileListsChangeNoSample) {
+  const r1::Epoch e = make_epoch(random_cloud(1500, 29), 6, r1::Shape::kSphere);
+  const Scene s = make_scene(e);
+  std::uint64_t tested_all = 0, tested_tiles = 0;
+  for (double distance : {30.0, 1500.0, 9000.0, 80000.0}) {
+    View v = lone_view({distance * 0.6, distance * 0.48, distance * 0.64}, 0);
+    v.width = 72, v.height = 40;
+    v.field = true;
+    const CameraFrame f = camera_frame(v);
+    const FieldFrame tiled = make_field_frame(s, v, f);
+    FieldFrame untiled = tiled;
+    untiled.top_by_tile.clear();
+    std::vector<FieldSample> a, b;
+    FieldRayStats sa, sb;
+    for (int y = 0; y < v.height; ++y)
+      for (int x = 0; x < v.width; ++x) {
+        const std::uint64_t k = static_cast<std::uint64_t>(y * v.width + x);
+        const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
+        march_field(tiled, ray, std::numeric_limits<double>::infinity(), k, a, &sa);
+        march_field(untiled, ray, std::numeric_limits<double>::infinity(), k, b, &sb);
+        ASSERT_EQ(a.size(), b.size()) << distance << " pixel " << x << "," << y;
+        for (std::size_t i = 0; i < a.size(); ++i) {
+          ASSERT_EQ(a[i].t, b[i].t);
+          ASSERT_EQ(a[i].alpha, b[i].alpha);
+          ASSERT_EQ(a[i].color.x, b[i].color.x);
+          ASSERT_EQ(a[i].flow.z, b[i].flow.z);
+        }
+      }
+    tested_tiles += sa.walked;
+    tested_all += sb.walked;
+  }
+  EXPECT_LT(tested_tiles, tested_all);
 }
 
 TEST(Field, JitterIsAPureFunctionOfItsCounters) {

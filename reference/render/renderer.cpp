@@ -19,26 +19,6 @@ constexpr double kSplatLowPass = 0.3;        // px^2 added to the projected cova
 constexpr double kMinAlpha = 1.0 / 255.0;    // splat contributions below this are dropped
 constexpr int kTile = 16;                    // splat binning tile, pixels
 
-// The pixel rectangle [x0, x1) x [y0, y1) that holds the projection of a box; the whole image
-// when part of the box lies at or behind the near plane.
-struct Rect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  bool empty() const { return x0 >= x1 || y0 >= y1; }
-};
-Rect project_box(const View& v, const CameraFrame& f, const Vec3& lo, const Vec3& hi) {
-  double minx = kInf, miny = kInf, maxx = -kInf, maxy = -kInf;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 corner{c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
-    const Projected p = project(v, f, corner);
-    if (p.depth <= kNear) return {0, 0, v.width, v.height};
-    minx = std::min(minx, p.px), maxx = std::max(maxx, p.px);
-    miny = std::min(miny, p.py), maxy = std::max(maxy, p.py);
-  }
-  const auto clampi = [](double d, int top) { return static_cast<int>(std::clamp(d, 0.0, static_cast<double>(top))); };
-  return {clampi(std::floor(minx), v.width), clampi(std::floor(miny), v.height), clampi(std::ceil(maxx) + 1, v.width),
-          clampi(std::ceil(maxy) + 1, v.height)};
-}
-
 // The opaque layer: nearest hit per pixel.
 struct Opaque {
   std::vector<double> t;
@@ -169,9 +149,13 @@ std::vector<Tube> bundle(const Scene& s, const View& v, const CameraFrame& f, co
 
 // Screen diameters of the visible particles; 0 for every particle outside the frustum, so only
 // visible particles can anchor an edge (R1-RND-064).
-std::vector<double> screen_sizes(const Scene& s, const std::vector<Visible>& visible) {
+// Per particle its screen diameter when visible, else 0: the listed particles and the far nodes'
+// members.
+std::vector<double> screen_sizes(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled) {
   std::vector<double> size(s.n, 0.0);
-  for (const Visible& vis : visible) size[vis.particle] = vis.s;
+  for (const Visible& vis : culled.visible) size[vis.particle] = vis.s;
+  for (const FarNode& node : culled.far)
+    for_each_member(s, node.level, node.id, [&](std::uint32_t p) { size[p] = classify(s, v, f, p).s; });
   return size;
 }
 
@@ -258,7 +242,7 @@ double splat_reach(const Splat& sp) {
 BundleStats bundle_counts(const Scene& scene, const View& view) {
   const CameraFrame f = camera_frame(view);
   BundleStats st;
-  bundle(scene, view, f, screen_sizes(scene, cull(scene, view, f)), st);
+  bundle(scene, view, f, screen_sizes(scene, view, f, cull_frame(scene, view, f)), st);
   return st;
 }
 
@@ -378,11 +362,14 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   // Cull and classify (R1-RND-020..023).
   auto t0 = clock::now();
   CullStats cs;
-  const std::vector<Visible> visible = cull(s, v, f, &cs);
-  st.visible = visible.size();
+  // Far nodes' members are visible T-infinity particles drawn by the field alone (R1-RND-025).
+  const CullResult culled = cull_frame(s, v, f, &cs);
+  const std::vector<Visible>& visible = culled.visible;
+  st.visible = visible.size() + culled.far_particles;
   st.nodes_tested = cs.nodes_tested;
   st.culled_nodes = cs.nodes_culled;
   for (const Visible& vis : visible) ++st.tier_count[static_cast<std::size_t>(vis.tier)];
+  st.tier_count[static_cast<std::size_t>(Tier::kTinf)] += culled.far_particles;
   st.cull_s = seconds_since(t0);
 
   // Opaque impostors: T0 draws as T1 until the content tier exists (R1-RND-024).
@@ -409,8 +396,8 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
 
   // Edge tubes with the flow strip (R1-RND-063..066).
   t0 = clock::now();
-  const std::vector<double> size = screen_sizes(s, visible);
   if (v.edges) {
+    const std::vector<double> size = screen_sizes(s, v, f, culled);
     BundleStats bs;
     const std::vector<Tube> tubes = bundle(s, v, f, size, bs);
     st.edges_in_view = bs.in_view;

@@ -78,6 +78,7 @@ Scene make_scene(const Epoch& e) {
         frontier = std::move(next);
       }
       members = std::move(frontier);
+      d.count = static_cast<std::uint32_t>(members.size());
       for (std::uint32_t p : members) {
         d.phi += s.phi[p];
         weight += n * s.phi[p];

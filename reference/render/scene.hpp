@@ -20,6 +20,7 @@ struct NodeData {
   double phi = 0;        // sum of member phi
   Vec3 color;            // (n phi)-weighted mean of the members' linear colour times brightness
   double radius = 0;     // sqrt(sum of member radius^2): the area-equivalent radius for edges
+  std::uint32_t count = 0;  // member particles
 };
 
 struct Scene {
@@ -45,6 +46,18 @@ struct Scene {
 double brightness(double n_phi);
 
 Scene make_scene(const Epoch& e);
+
+// Calls fn(p) for every member particle p of node `id` at `level`, in hierarchy order (children in
+// order, level 0's particles in order).
+template <class Fn>
+void for_each_member(const Scene& s, int level, std::uint32_t id, Fn&& fn) {
+  const auto& children = s.hierarchy->levels[static_cast<std::size_t>(level)][id].children;
+  if (level == 0) {
+    for (std::uint32_t p : children) fn(p);
+    return;
+  }
+  for (std::uint32_t c : children) for_each_member(s, level - 1, c, fn);
+}
 
 // R1-RND-007: the camera distance from the focus centroid at which every particle's bounding
 // sphere fits the vertical field of view `fov_deg`, with 5% margin (the default orbit radius).
