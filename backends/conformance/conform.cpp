@@ -266,9 +266,8 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
     // pure, and the scene (normalised to R_scene) covers the same part of the image at every size,
     // so the times compare the graphs and not the framing (R1-CONF-062).
     double distance = 0;
-    auto measure = [&](const Epoch& e) -> Status {
-      const render::Scene scene = render::make_scene(e);
-      render::View v = view_at(distance, o.tinf_width, o.tinf_height, scene.centroid);
+    auto measure = [&](const Epoch& e, const render::Vec3& centroid) -> Status {
+      render::View v = view_at(distance, o.tinf_width, o.tinf_height, centroid);
       v.edges = false;  // edges are not part of the T-infinity tier
       v.labels = false;
       render::RenderOptions ro;
@@ -314,11 +313,13 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       R1_ASSIGN(Epoch e, read_epoch(dir));
       epochs.push_back(std::move(e));
     }
+    std::vector<render::Vec3> centroids;
     for (const Epoch& e : epochs) {
       const render::Scene scene = render::make_scene(e);
+      centroids.push_back(scene.centroid);
       distance = std::max(distance, pure_tinf_distance(scene, view_at(1, o.tinf_width, o.tinf_height, scene.centroid)));
     }
-    for (const Epoch& e : epochs) R1_TRY(measure(e));
+    for (std::size_t k = 0; k < epochs.size(); ++k) R1_TRY(measure(epochs[k], centroids[k]));
     if (times.size() < 2) return Status::input("conform: P_RENDER_TINF needs at least two snapshot sizes");
     double lo = times[0].second, hi = times[0].second;
     std::string list;

@@ -110,7 +110,6 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
   FieldFrame ff;
   ff.scene = &s;
   ff.params = p;
-  ff.focal_px = f.focal_px;
   ff.frame = f;
   ff.camera = v.camera.position;
   ff.tiers = v.tiers;
@@ -207,7 +206,7 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
 
 double field_sigma(const FieldFrame& ff, double t) {
   const double tau = ff.tau_cam * std::max(t, 0.0) / ff.t_far;
-  return std::max(std::sqrt(tau), 0.5 * std::max(t, 0.0) / ff.focal_px + 1e-9);
+  return std::max(std::sqrt(tau), 0.5 * std::max(t, 0.0) / ff.frame.focal_px + 1e-9);
 }
 
 FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {

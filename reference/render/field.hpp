@@ -68,7 +68,6 @@ struct FieldFrame {
   std::vector<std::vector<std::uint32_t>> top_by_tile;
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
-  double focal_px = 1;
   FieldParams params;
 
   // Particle p's field weight: its T-infinity weight (1 below the handoff band, 0 above it, linear
