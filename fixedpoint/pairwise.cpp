@@ -34,40 +34,48 @@ double block_tree(double* t) {
   return t[0];
 }
 
-// The tree over n leaves, where fill(begin, count, out) writes leaves begin.. into out. Full
-// blocks enter a binary counter (a stack of perfect subtrees, a merge whenever two have the same
-// height); the stack then folds from the right, which is the split rule applied to the items.
+}  // namespace
+
+// Full blocks enter a binary counter (a stack of perfect subtrees, a merge whenever two have the
+// same height); the stack then folds from the right, which is the split rule applied to the
+// items (proofs/pairwise_tree.md, step 3).
+void PairwiseAccumulator::push(double* block) noexcept {
+  double s = block_tree(block);
+  unsigned h = 0;
+  while (top_ > 0 && heights_[top_ - 1] == h) {
+    s = sums_[--top_] + s;
+    ++h;
+  }
+  sums_[top_] = s;
+  heights_[top_++] = h;
+  any_ = true;
+}
+
+double PairwiseAccumulator::finish(const double* tail, std::size_t count) noexcept {
+  // The tail is the last item (or the whole tree when no block came); without a tail the last
+  // perfect subtree is.
+  double s = (count > 0 || !any_) ? recursive_sum(tail, count) : sums_[--top_];
+  while (top_ > 0) s = sums_[--top_] + s;
+  any_ = false;
+  return s;
+}
+
+namespace {
+
+static_assert(kBlock == kPairwiseLeafBlock, "the accumulator's blocks are the tree's blocks");
+
+// The tree over n leaves, where fill(begin, count, out) writes leaves begin.. into out.
 template <class Fill>
 double blocked_tree(std::size_t n, Fill fill) {
   alignas(64) double buf[kBlock];
-  if (n <= kBlock) {
-    fill(0, n, buf);
-    return recursive_sum(buf, n);
-  }
-  double sums[64];
-  unsigned heights[64];
-  int top = 0;
+  PairwiseAccumulator acc;
   std::size_t i = 0;
   for (; i + kBlock <= n; i += kBlock) {
     fill(i, kBlock, buf);
-    double s = block_tree(buf);
-    unsigned h = 0;
-    while (top > 0 && heights[top - 1] == h) {
-      s = sums[--top] + s;
-      ++h;
-    }
-    sums[top] = s;
-    heights[top++] = h;
+    acc.push(buf);
   }
-  double s = 0.0;
-  if (i < n) {
-    fill(i, n - i, buf);
-    s = recursive_sum(buf, n - i);
-  } else {
-    s = sums[--top];
-  }
-  while (top > 0) s = sums[--top] + s;
-  return s;
+  fill(i, n - i, buf);
+  return acc.finish(buf, n - i);
 }
 
 double serial_sum(const double* x, std::size_t n) {

@@ -31,6 +31,26 @@ double parallel_pairwise_dot(std::span<const double> a, std::span<const double> 
                              std::size_t grain = kPairwiseDefaultGrain);
 double parallel_pairwise_norm2(std::span<const double> x, std::size_t grain = kPairwiseDefaultGrain);
 
+// The tree built incrementally, for callers that produce the leaves in pieces (many dot products
+// in one sweep over a row-major matrix, say): push() each full block of kPairwiseLeafBlock
+// consecutive leaves in order, then finish() with the remaining tail (fewer than
+// kPairwiseLeafBlock leaves). The result is S of all leaves pushed, bit for bit (the blocked
+// evaluation of proofs/pairwise_tree.md, step 3); pairwise_sum and pairwise_dot use it.
+inline constexpr std::size_t kPairwiseLeafBlock = 64;
+class PairwiseAccumulator {
+ public:
+  // Adds the next full block of kPairwiseLeafBlock leaves; the buffer is overwritten.
+  void push(double* block) noexcept;
+  // S of every leaf pushed followed by the tail; resets the accumulator.
+  double finish(const double* tail, std::size_t count) noexcept;
+
+ private:
+  double sums_[64] = {};
+  unsigned heights_[64] = {};
+  int top_ = 0;
+  bool any_ = false;
+};
+
 // The definition above as literal recursion, without the blocked fast path: the oracle the tests
 // compare the fast path with (the switch that turns the fast path off).
 double pairwise_sum_recursive(std::span<const double> x) noexcept;
