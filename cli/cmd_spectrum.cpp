@@ -73,6 +73,7 @@ Status report_spectrum(const SpectrumOptions& o, const Graph& g, const Spectrum<
                         {"found", s.found},
                         {"restarts", s.restarts},
                         {"matvecs", s.matvecs},
+                        {"block_applications", s.passes},
                         {"tolerance", o.tolerance},
                         {"load_s", load_s},
                         {"solve_s", solve_s},
@@ -85,7 +86,7 @@ Status report_spectrum(const SpectrumOptions& o, const Graph& g, const Spectrum<
   for (std::size_t k = 0; k < 6; ++k)
     std::printf("lambda_%zu     %.17g  residual %.3g%s\n", k + 1, s.eigenvalues[k], s.residuals[k],
                 k > s.found ? "  (missing: n < 7)" : "");
-  std::printf("work         %u restarts, %u operator applications\n", s.restarts, s.matvecs);
+  std::printf("work         %u restarts, %u block applications of L (%u vectors)\n", s.restarts, s.passes, s.matvecs);
   std::printf("time         load %.3f s, solve %.3f s; peak memory %.0f MiB\n", load_s, solve_s, peak_rss_mib());
   return Status::ok();
 }
@@ -138,7 +139,7 @@ void add_spectrum(CLI::App& app, Runner& selected) {
   cmd->add_option("--domain", o->domain, "q32 (canonical, default) or fp64");
   cmd->add_option("--rho", o->rho, "regularisation rho >= 0 (default: 0 if connected, else the mean weighted degree)");
   cmd->add_option("--tolerance", o->tolerance, "residual target ||L u - lambda u|| (default 1e-9)");
-  cmd->add_option("--basis", o->basis, "Lanczos vectors per restart cycle, 12..1024 (default 32)");
+  cmd->add_option("--basis", o->basis, "block Krylov steps per restart cycle (5 vectors each), 4..200 (default 32)");
   cmd->add_option("--max-restarts", o->max_restarts, "restart cap (default 0: the solver's own, 1000)");
   cmd->add_flag("--parallel", o->parallel, "TBB kernels (bit-identical to the serial default)");
   cmd->add_flag("--json", o->json, "print one JSON object");

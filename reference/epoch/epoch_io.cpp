@@ -176,7 +176,8 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
   m["residuals"] = e.spectrum.residuals;
   m["found"] = e.spectrum.found;
   m["rho"] = e.spectrum.rho;
-  m["spectral_work"] = {{"restarts", e.spectrum.restarts}, {"matvecs", e.spectrum.matvecs}};
+  m["spectral_work"] = {{"restarts", e.spectrum.restarts}, {"matvecs", e.spectrum.matvecs},
+                         {"block_applications", e.spectrum.passes}};
   m["scale"] = e.frame.scale;
   const Alignment& a = e.frame.alignment;
   m["alignment"] = {{"genesis", a.genesis},         {"rotation", a.rotation},   {"scale", a.scale},

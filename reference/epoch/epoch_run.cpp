@@ -36,6 +36,7 @@ Result<Spectrum<Q32>> to_q32(const Spectrum<double>& s) {
   q.found = s.found;
   q.restarts = s.restarts;
   q.matvecs = s.matvecs;
+  q.passes = s.passes;
   for (std::size_t k = 0; k < 5; ++k) {
     q.u[k].reserve(s.u[k].size());
     for (double x : s.u[k]) {

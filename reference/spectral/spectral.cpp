@@ -4,45 +4,58 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "block_lanczos.hpp"
 #include "jacobi.hpp"
-#include "lanczos.hpp"
+#include "panel.hpp"
 #include "r1/reference/spectral.hpp"
-#include "vector_kernels.hpp"
+#include "trivial_vector.hpp"
 
 namespace r1 {
 
 namespace {
 
 using spectral::Eigenpair;
-using spectral::VectorOps;
+using spectral::Panel;
+using spectral::PanelOps;
 
-// The counter-RNG key of every random vector: the ASCII bytes "r1-spect" (R1-SPEC-030).
-constexpr std::uint64_t kSpectralSeed = 0x72312d7370656374u;
+using spectral::kSpectralSeed;
 // Eigenpairs wanted above the trivial one: u_2..u_6 (R-1.0 3.1 and 5.1).
 constexpr std::uint32_t kWant = 5;
-// Default cap on restarts when SpectralParams::max_restarts is 0 (R1-SPEC-034): far above the
-// cycles any measured graph needed (spec/spectral.md, performance), so it only stops a solve
-// that cannot reach the tolerance.
-constexpr std::uint32_t kDefaultMaxRestarts = 1000;
+// Graphs whose deflated space has at most this many dimensions are solved densely (R1-SPEC-050).
+constexpr std::uint32_t kDenseMax = 64;
 
 double as_double(fx::Q32 v) { return v.to_double(); }
 double as_double(double v) { return v; }
+
+using spectral::basis_frac;
+
+// v in the panel's units: Q32 raws RNE(v 2^frac) (ldexp is exact, from_double rounds once); fp64 v.
 template <class Scalar>
-Scalar from_double(double v);
+Scalar from_double(double v, int frac);
 template <>
-fx::Q32 from_double<fx::Q32>(double v) {
-  return fx::Q32::from_double(v);
+fx::Q32 from_double<fx::Q32>(double v, int frac) {
+  return fx::Q32::from_double(std::ldexp(v, frac - 32));
 }
 template <>
-double from_double<double>(double v) {
+double from_double<double>(double v, int) {
   return v;
 }
+
+// D^(1/2) 1 in the panel's units: Q32 recomputed exactly at frac bits, fp64 the operator's.
+std::vector<fx::Q32> panel_trivial(const Graph& g, const SpectralOperator<fx::Q32>& op, int frac) {
+  return spectral::scaled_trivial(g, op.rho, op.e, frac);
+}
+std::vector<double> panel_trivial(const Graph&, const SpectralOperator<double>& op, int) { return op.trivial; }
+
+// The factor that turns panel units into the output's (Q32 raws at 2^-32; fp64 unchanged).
+double output_units(fx::Q32*, int frac) { return std::ldexp(1.0, 32 - frac); }
+double output_units(double*, int) { return 1.0; }
 
 // The dense path (R1-SPEC-050..051): the operator as an n x n double matrix, the trivial
 // direction removed by a Householder reflection, cyclic Jacobi on the (n-1) x (n-1) rest.
 template <class Scalar>
-std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, const VectorOps<Scalar>& ops,
-                                           std::uint32_t want, std::uint32_t& matvecs) {
+std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops,
+                                           std::uint32_t want, std::uint32_t& matvecs, std::uint32_t& passes) {
   const std::size_t n = op.n;
   const Graph& gr = *op.graph;
   std::vector<double> a(n * n, 0.0);
@@ -87,22 +100,27 @@ std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, c
   for (std::size_t i = 0; i < r; ++i)
     for (std::size_t j = 0; j < r; ++j) inner[i * r + j] = b[(i + 1) * n + (j + 1)];
   const spectral::JacobiResult eig = spectral::jacobi_eigen(r, std::move(inner));
-  // Entries scaled to squared length 2^e like the Lanczos vectors (R1-SPEC-011).
+  // Entries scaled to squared length 2^e like the Lanczos vectors (R1-SPEC-011); the Rayleigh
+  // quotients and residuals in one block application (columns 0..want-1, scratch after them).
   const double root = std::sqrt(std::ldexp(1.0, op.e));
-  std::vector<Eigenpair<Scalar>> pairs;
-  std::vector<Scalar> y(n), res(n);
-  for (std::uint32_t c = 0; c < want; ++c) {
-    Eigenpair<Scalar> p;
-    p.x.resize(n);
+  Panel<Scalar> p(n, 2 * std::size_t{want});
+  for (std::uint32_t c = 0; c < want; ++c)
     for (std::size_t i = 0; i < n; ++i) {
       double u = 0;
       for (std::size_t k = 0; k < r; ++k) u = u + h[i * n + k + 1] * eig.vectors[k * r + c];
-      p.x[i] = from_double<Scalar>(u * root);
+      p.at(i, c) = from_double<Scalar>(u * root, ops.frac_bits());
     }
-    spectral::rayleigh<Scalar>(op, ops, p.x, y, res, p.lambda, p.residual);
-    ++matvecs;
-    pairs.push_back(std::move(p));
+  std::vector<std::uint32_t> xs(want), ys(want);
+  for (std::uint32_t c = 0; c < want; ++c) {
+    xs[c] = c;
+    ys[c] = want + c;
   }
+  std::vector<double> lambda(want), residual(want);
+  spectral::rayleigh_block<Scalar>(op, ops, p, xs, ys, lambda, residual);
+  matvecs += want;
+  ++passes;
+  std::vector<Eigenpair<Scalar>> pairs;
+  for (std::uint32_t c = 0; c < want; ++c) pairs.push_back(Eigenpair<Scalar>{p.copy_column(c), lambda[c], residual[c]});
   std::stable_sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& z) { return x.lambda < z.lambda; });
   return pairs;
 }
@@ -115,49 +133,47 @@ Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, con
   Spectrum<Scalar> out;
   out.n = g.n;
   out.rho = op.rho.to_double();
-  const VectorOps<Scalar> ops(g.n, op.e, options.parallel);
+  const PanelOps<Scalar> ops(g.n, op.e, options.parallel, basis_frac(op.e));
+  const std::vector<Scalar> trivial = panel_trivial(g, op, ops.frac_bits());
   const std::uint32_t want = std::min<std::uint32_t>(kWant, g.n - 1);
   std::vector<Eigenpair<Scalar>> pairs;
-  // Dense when the deflated space has at most 2m dimensions (R1-SPEC-050): a Krylov basis of m
-  // vectors plus locked and fresh vectors would need most of the space anyway.
-  if (g.n - 1 <= 2 * params.basis) {
-    pairs = dense_pairs(op, ops, want, out.matvecs);
+  if (g.n - 1 <= kDenseMax) {
+    pairs = dense_pairs(op, ops, want, out.matvecs, out.passes);
   } else {
-    spectral::LanczosConfig cfg;
-    cfg.want = want;
-    cfg.basis = params.basis;
-    // Ritz vectors kept at a restart: 3/8 of the basis (12 of 32), at least want + 1 (R1-SPEC-026).
-    cfg.keep = std::max<std::uint32_t>(want + 1, params.basis * 3 / 8);
-    cfg.tolerance = params.tolerance;
-    cfg.max_cycles = (params.max_restarts == 0 ? kDefaultMaxRestarts : params.max_restarts) + 1;
-    cfg.seed = kSpectralSeed;
-    auto lz = spectral::thick_restart_lanczos(op, ops, cfg, progress);
+    const spectral::BlockLanczosConfig cfg = spectral::canonical_config(g.n, want, params, kSpectralSeed);
+    auto lz = spectral::block_lanczos<Scalar>(op, ops, trivial, cfg, progress);
     pairs = std::move(lz.pairs);
     out.restarts = lz.cycles - 1;
     out.matvecs += lz.matvecs;
+    out.passes += lz.passes;
   }
   // Outputs (R1-SPEC-060..063): lambda_1 = 0 with the residual of the trivial vector, then the
   // pairs ascending, unit vectors u = x / ||x|| rounded once per entry; missing ones are zero.
-  std::vector<Scalar> y(g.n), r(g.n);
-  op.apply(op.trivial.data(), y.data(), options.parallel);
+  Panel<Scalar> p(g.n, 2);
+  p.set_column(0, trivial);
+  op.apply_block(p.column(0), p.cols(), p.column(1), p.cols(), 1, options.parallel);
   ++out.matvecs;
+  ++out.passes;
   out.eigenvalues[0] = 0;
-  out.residuals[0] = std::sqrt(ops.dot(y, y) / ops.dot(op.trivial, op.trivial));
+  out.residuals[0] = std::sqrt(ops.dot(p, 1, 1) / ops.dot(p, 0, 0));
   out.found = static_cast<std::uint32_t>(pairs.size());
   for (std::size_t c = 0; c < 5; ++c) {
     out.u[c].assign(g.n, Scalar{});
     if (c >= pairs.size()) continue;
     out.eigenvalues[c + 1] = pairs[c].lambda;
     out.residuals[c + 1] = pairs[c].residual;
-    const double length = std::sqrt(std::ldexp(ops.dot(pairs[c].x, pairs[c].x), op.e));
-    ops.scale(out.u[c], pairs[c].x, 1.0 / length);
+    p.set_column(0, pairs[c].x);
+    const double length = std::sqrt(std::ldexp(ops.dot(p, 0, 0), op.e));
+    ops.scale(p, 0, output_units(static_cast<Scalar*>(nullptr), ops.frac_bits()) / length);
+    out.u[c] = p.copy_column(0);
   }
   return out;
 }
 
 Status check_params(const SpectralParams& p) {
-  // basis >= 12 leaves room for the want + 1 kept Ritz vectors and as many new ones per cycle.
-  if (p.basis < 12 || p.basis > 1024) return Status::input("spectral: basis must be 12..1024 (got " + std::to_string(p.basis) + ")");
+  // basis >= 4 block steps leaves room for the want + b kept Ritz vectors and two blocks
+  // (R1-SPEC-021); 200 steps (1000 columns) bounds the memory and the Rayleigh-Ritz cost.
+  if (p.basis < 4 || p.basis > 200) return Status::input("spectral: basis must be 4..200 block steps (got " + std::to_string(p.basis) + ")");
   if (!(p.tolerance > 0) || !std::isfinite(p.tolerance))
     return Status::input("spectral: tolerance must be a positive number");
   return Status::ok();
@@ -173,6 +189,8 @@ Result<Spectrum<Scalar>> guarded(const Graph& g, const SpectralParams& params, c
     return Status::internal(std::string("spectral: fixed-point overflow (") + e.what() + ")");
   } catch (const fx::DomainError& e) {
     return Status::internal(std::string("spectral: fixed-point domain error (") + e.what() + ")");
+  } catch (const std::runtime_error& e) {
+    return Status::internal(e.what());
   }
 }
 

@@ -1,6 +1,6 @@
 // The spectral solver's exact kernels against independent references: RNE square roots of
 // ratios and RNE shifts against Boost cpp_int, correctly rounded doubles against cpp_bin_float,
-// Jacobi against Eigen, Q32 kernels serial vs TBB (R1-SPEC-010..015, R1-SPEC-040..042).
+// Jacobi against Eigen, panel kernels serial vs TBB and against exact references (R1-SPEC-010..015, R1-SPEC-040..042).
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
@@ -14,7 +14,8 @@
 #include "exact_round.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "jacobi.hpp"
-#include "vector_kernels.hpp"
+#include "panel.hpp"
+#include "r1/fixedpoint/pairwise.hpp"
 
 namespace {
 
@@ -197,32 +198,58 @@ TEST(SpectralJacobi, RepeatedAndDiagonalInputs) {
   EXPECT_NEAR(o.values[2], 3, 1e-15);
 }
 
-// ---- vector kernels: serial == TBB, Q32 combine == exact reference ----
+// ---- panel kernels: serial == TBB, Q32 == exact reference, fp64 == the pairwise tree ----
+
+using QPanel = r1::spectral::Panel<r1::fx::Q32>;
+using QOps = r1::spectral::PanelOps<r1::fx::Q32>;
+using Cols = std::vector<std::uint32_t>;
 
 TEST(SpectralKernels, ParallelMatchesSerialBitForBit) {
   const std::size_t n = (std::size_t{1} << 16) + 777;  // above kParallelMin, ragged last block
-  const r1::spectral::VectorOps<r1::fx::Q32> serial(n, 17, false), parallel(n, 17, true);
-  std::vector<r1::fx::Q32> a(n), b(n), c(n), out1(n), out2(n);
-  serial.random(a, 7, 0);
-  serial.random(b, 7, 1);
-  parallel.random(c, 7, 1);
-  EXPECT_EQ(b, c);
-  EXPECT_EQ(serial.dot(a, b), parallel.dot(a, b));
-  const double coefs[2] = {0.375, -1.25};
-  const r1::fx::Q32* xs[2] = {a.data(), b.data()};
-  serial.combine(out1, a.data(), coefs, xs);
-  parallel.combine(out2, a.data(), coefs, xs);
-  EXPECT_EQ(out1, out2);
-  double d1[2], d2[2];
-  serial.dots(xs, b, d1);
-  parallel.dots(xs, b, d2);
-  EXPECT_EQ(d1[0], d2[0]);
-  EXPECT_EQ(d1[1], d2[1]);
-  const r1::spectral::VectorOps<double> fs(n, 17, false), fp(n, 17, true);
-  std::vector<double> x(n), y(n);
-  fs.random(x, 7, 0);
-  fs.random(y, 7, 1);
-  EXPECT_EQ(fs.dot(x, y), fp.dot(x, y));
+  const QOps serial(n, 17, false), parallel(n, 17, true);
+  QPanel a(n, 5), b(n, 5);
+  for (std::uint32_t c = 0; c < 3; ++c) {
+    serial.random(a, c, 7, c);
+    parallel.random(b, c, 7, c);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::uint32_t c = 0; c < 3; ++c) ASSERT_EQ(a.at(i, c), b.at(i, c));
+  const Cols qs{0, 1, 2}, ws{1, 2};
+  std::vector<double> d1(6), d2(6);
+  serial.dots(a, qs, ws, d1);
+  parallel.dots(a, qs, ws, d2);
+  EXPECT_EQ(d1, d2);
+  const std::vector<double> coef{0.375, -1.25, 0.5, 2.0, -0.125, 1.0};  // 3 terms x 2 outputs
+  serial.combine(a, Cols{3, 4}, Cols{0, 1}, qs, coef);
+  parallel.combine(b, Cols{3, 4}, Cols{0, 1}, qs, coef);
+  serial.scale(a, 3, 0.7071);
+  parallel.scale(b, 3, 0.7071);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::uint32_t c = 3; c < 5; ++c) ASSERT_EQ(a.at(i, c), b.at(i, c));
+  const r1::spectral::PanelOps<double> fs(n, 17, false), fp(n, 17, true);
+  r1::spectral::Panel<double> x(n, 3);
+  for (std::uint32_t c = 0; c < 3; ++c) fs.random(x, c, 7, c);
+  fs.dots(x, qs, ws, d1);
+  fp.dots(x, qs, ws, d2);
+  EXPECT_EQ(d1, d2);
+}
+
+TEST(SpectralKernels, Fp64DotsAreThePairwiseTreeOfEachPair) {
+  // One sweep over the rows for many pairs gives, pair by pair, pairwise_dot's bits (R1-NUM-051)
+  // times 2^-e, at lengths around the 64-leaf blocks.
+  for (const std::size_t n : {1u, 63u, 64u, 65u, 200u, 4159u}) {
+    SCOPED_TRACE(n);
+    const r1::spectral::PanelOps<double> ops(n, 3, false);
+    r1::spectral::Panel<double> p(n, 3);
+    for (std::uint32_t c = 0; c < 3; ++c) ops.random(p, c, 11, c);
+    for (std::size_t i = 0; i < n; i += 3) p.at(i, 1) = p.at(i, 1) * 1e9;  // make the order matter
+    std::vector<double> d(9);
+    const Cols all{0, 1, 2};
+    ops.dots(p, all, all, d);
+    for (std::uint32_t q = 0; q < 3; ++q)
+      for (std::uint32_t w = 0; w < 3; ++w)
+        EXPECT_EQ(d[q * 3 + w], std::ldexp(r1::fx::pairwise_dot(p.copy_column(q), p.copy_column(w)), -3));
+  }
 }
 
 TEST(SpectralKernels, Q32CombineRoundsOnceExactly) {
@@ -230,48 +257,50 @@ TEST(SpectralKernels, Q32CombineRoundsOnceExactly) {
     RC_PRE(!raw_a.empty());
     RC_PRE(std::fabs(c0) < 7.9 && std::fabs(c1) < 7.9);
     const std::size_t n = raw_a.size();
-    const r1::spectral::VectorOps<r1::fx::Q32> ops(n, 3, false);
-    std::vector<r1::fx::Q32> a(n), b(n), out(n);
+    const QOps ops(n, 3, false);
+    QPanel p(n, 2);
     for (std::size_t i = 0; i < n; ++i) {
-      a[i] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(raw_a[i]) * 977);
-      b[i] = r1::fx::Q32::from_raw(-static_cast<std::int64_t>(raw_a[n - 1 - i]) * 313);
+      p.at(i, 0) = r1::fx::Q32::from_raw(static_cast<std::int64_t>(raw_a[i]) * 977);
+      p.at(i, 1) = r1::fx::Q32::from_raw(-static_cast<std::int64_t>(raw_a[n - 1 - i]) * 313);
     }
-    const double coefs[2] = {c0, c1};
-    const r1::fx::Q32* xs[2] = {a.data(), b.data()};
-    ops.combine(out, b.data(), coefs, xs);
+    const QPanel before = p;
+    // Column 1 <- column 1 + c0 a + c1 b, in place: the row's old values feed every term.
+    ops.combine(p, Cols{1}, Cols{1}, Cols{0, 1}, std::vector<double>{c0, c1});
     const cpp_int k0 = r1::spectral::coef60(c0), k1 = r1::spectral::coef60(c1);
     for (std::size_t i = 0; i < n; ++i) {
-      const cpp_int v = (cpp_int(b[i].raw) << 60) + k0 * a[i].raw + k1 * b[i].raw;
-      RC_ASSERT(cpp_int(out[i].raw) == rne_pow2(v, 60));
+      const std::int64_t a = before.at(i, 0).raw, b = before.at(i, 1).raw;
+      const cpp_int v = (cpp_int(b) << 60) + k0 * a + k1 * b;
+      RC_ASSERT(cpp_int(p.at(i, 1).raw) == rne_pow2(v, 60));
+      RC_ASSERT(p.at(i, 0) == before.at(i, 0));
     }
   });
 }
 
-// The unchecked i128 fast paths (factors below 2^57) and the checked path (any larger factor in
-// the block or row) give the exact sums a cpp_int computes: mixes of small and near-2^62 raws.
+// The unchecked i128 fast paths and the checked path (a factor too large for the fast path's
+// bound in the block or row) give the exact sums a cpp_int computes: mixes of small and
+// near-2^62 raws.
 TEST(SpectralKernels, FastAndCheckedPathsAreBothExact) {
   for (const int big_bits : {40, 56, 57, 62}) {
     SCOPED_TRACE(big_bits);
     const std::size_t n = 5000;  // two blocks, the second ragged
-    const r1::spectral::VectorOps<r1::fx::Q32> ops(n, 0, false);
-    std::vector<r1::fx::Q32> a(n), b(n), out(n);
+    const QOps ops(n, 0, false);
+    QPanel p(n, 3);
     for (std::size_t i = 0; i < n; ++i) {
       const auto r = r1::rng::bits(99, i, 0);
       const std::int64_t mag = static_cast<std::int64_t>(r >> (64 - big_bits));
       // A few entries at full size, the rest small, signs mixed.
-      a[i] = r1::fx::Q32::from_raw((i % 97 == 0 ? mag : mag >> 20) * ((r & 1) ? -1 : 1));
-      b[i] = r1::fx::Q32::from_raw((i % 89 == 0 ? mag : mag >> 18) * ((r & 2) ? -1 : 1));
+      p.at(i, 0) = r1::fx::Q32::from_raw((i % 97 == 0 ? mag : mag >> 20) * ((r & 1) ? -1 : 1));
+      p.at(i, 1) = r1::fx::Q32::from_raw((i % 89 == 0 ? mag : mag >> 18) * ((r & 2) ? -1 : 1));
     }
-    const r1::fx::Q32* xs[2] = {a.data(), b.data()};
-    double d[2];
-    ops.dots(xs, b, d);
+    std::vector<double> d(2);
+    ops.dots(p, Cols{0, 1}, Cols{1}, d);
     cpp_int sa = 0, sb = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      cpp_int t = a[i].raw;
-      t *= b[i].raw;
+      cpp_int t = p.at(i, 0).raw;
+      t *= p.at(i, 1).raw;
       sa += t;
-      t = b[i].raw;
-      t *= b[i].raw;
+      t = p.at(i, 1).raw;
+      t *= p.at(i, 1).raw;
       sb += t;
     }
     // dots returns the exact sum / 2^64, correctly rounded to double (ldexp of the correctly
@@ -279,11 +308,12 @@ TEST(SpectralKernels, FastAndCheckedPathsAreBothExact) {
     EXPECT_EQ(d[0], std::ldexp(sa.convert_to<double>(), -64));
     EXPECT_EQ(d[1], std::ldexp(sb.convert_to<double>(), -64));
     if (big_bits <= 57) {
-      const double coefs[2] = {0.375, -1.25};
-      ops.combine(out, nullptr, coefs, xs);
-      const cpp_int k0 = r1::spectral::coef60(0.375), k1 = r1::spectral::coef60(-1.25);
+      // Coefficients near 8 push the fast path's bound for the large rows.
+      const double c0 = 7.75, c1 = -1.25;
+      ops.combine(p, Cols{2}, {}, Cols{0, 1}, std::vector<double>{c0, c1});
+      const cpp_int k0 = r1::spectral::coef60(c0), k1 = r1::spectral::coef60(c1);
       for (std::size_t i = 0; i < n; i += 7)
-        ASSERT_EQ(cpp_int(out[i].raw), rne_pow2(k0 * a[i].raw + k1 * b[i].raw, 60)) << i;
+        ASSERT_EQ(cpp_int(p.at(i, 2).raw), rne_pow2(k0 * p.at(i, 0).raw + k1 * p.at(i, 1).raw, 60)) << i;
     }
   }
 }

@@ -5,6 +5,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -14,7 +15,8 @@
 #include "r1/fixedpoint/pairwise.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/spectral.hpp"
-#include "vector_kernels.hpp"
+#include "panel.hpp"
+#include "trivial_vector.hpp"
 
 namespace r1 {
 
@@ -69,6 +71,23 @@ Status check_graph(const Graph& g) {
 
 }  // namespace
 
+namespace spectral {
+
+std::vector<fx::Q32> scaled_trivial(const Graph& g, fx::Q32 rho, int e, int frac) {
+  if (2 * frac + e > 120) throw std::invalid_argument("scaled_trivial: 2 frac + e above 120");
+  u128 sum_d = 0;
+  for (std::uint32_t i = 0; i < g.n; ++i) sum_d += regularised_degree(g, i, rho);
+  std::vector<fx::Q32> t(g.n);
+  for (std::uint32_t i = 0; i < g.n; ++i) {
+    // D_i < 2^64, so the numerator is below 2^(64 + 120) and the root below 2^(frac + e / 2) < 2^63.
+    const U256 num = spectral::shl(U256{regularised_degree(g, i, rho), 0}, 2 * frac + e);
+    t[i] = fx::Q32::from_raw(static_cast<std::int64_t>(spectral::rne_sqrt_ratio(num, sum_d)));
+  }
+  return t;
+}
+
+}  // namespace spectral
+
 Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const SpectralParams& params) {
   R1_TRY(check_graph(g));
   R1_ASSIGN(const fx::Q32 rho, spectral_rho(g, params));
@@ -102,11 +121,7 @@ Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const Sp
     }
   }
   // trivial_i = RNE(2^32 sqrt(2^e D_i / sum D)) (R1-SPEC-006): squared length 2^e up to rounding.
-  op.trivial.resize(n);
-  for (std::uint32_t i = 0; i < g.n; ++i) {
-    const U256 num = spectral::shl(U256{d[i], 0}, 64 + op.e);  // < 2^(64 + 64 + 32)
-    op.trivial[i] = fx::Q32::from_raw(static_cast<std::int64_t>(spectral::rne_sqrt_ratio(num, sum_d)));
-  }
+  op.trivial = spectral::scaled_trivial(g, rho, op.e, 32);
   return op;
 }
 
@@ -152,95 +167,108 @@ Result<SpectralOperator<double>> spectral_operator_f64(const Graph& g, const Spe
 // ---- application (R1-SPEC-005) --------------------------------------------------------------------
 
 template <>
-void SpectralOperator<fx::Q32>::apply(const fx::Q32* x, fx::Q32* y, bool parallel) const {
+void SpectralOperator<fx::Q32>::apply_block(const fx::Q32* x, std::size_t ldx, fx::Q32* y, std::size_t ldy,
+                                            std::size_t count, bool parallel) const {
   const Graph& gr = *graph;
-  // c = RNE(sum_j g_j x_j): the rank-one coefficient, rounded once to Q32.
-  std::int64_t c = 0;
+  const bool par = parallel && n >= spectral::kParallelMin;
+  // c_col = RNE(sum_j g_j x_j): the rank-one coefficient of each column, rounded once to Q32.
+  std::vector<std::int64_t> c(count, 0);
   if (!g.empty()) {
-    tbb::enumerable_thread_specific<FastExact> parts;
-    auto body = [&](std::size_t lo, std::size_t hi) {
-      FastExact& acc = parts.local();
-      for (std::size_t j = lo; j < hi; ++j) acc.add(static_cast<i128>(g[j].raw) * x[j].raw);
-    };
-    if (parallel && n >= spectral::kParallelMin) {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, spectral::kBlock),
-                        [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
-    } else {
-      body(0, n);
+    tbb::enumerable_thread_specific<std::vector<FastExact>> parts([count] { return std::vector<FastExact>(count); });
+    spectral::for_row_blocks(n, par, [&](std::size_t lo, std::size_t hi) {
+      std::vector<FastExact>& acc = parts.local();
+      for (std::size_t j = lo; j < hi; ++j)
+        for (std::size_t col = 0; col < count; ++col) acc[col].add(static_cast<i128>(g[j].raw) * x[j * ldx + col].raw);
+    });
+    for (std::size_t col = 0; col < count; ++col) {
+      FastExact total;
+      for (const auto& p : parts) total.merge(p[col]);  // exact: the merge order plays no part
+      c[col] = total.round_shift(32);
     }
-    FastExact total;
-    for (const FastExact& p : parts) total.merge(p);
-    c = total.round_shift(32);
   }
   const i128 one = i128{1} << 32;
-  auto rows = [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(n, par, [&](std::size_t lo, std::size_t hi) {
+    // Unsigned: a speculative sum may wrap (defined behaviour); it is used only when it cannot.
+    std::vector<u128> sum(count);
+    std::vector<std::uint64_t> xbits(count);
     for (std::size_t i = lo; i < hi; ++i) {
-      // Fast path: a plain i128 row sum, taken only when it provably cannot overflow. With every
-      // m and g raw below 2^34 (they are <= 2^32: M_ij <= 1, g_i <= 1) and every x raw and c below
-      // 2^57, each product is below 2^91 and a row of at most 2^32 terms sums below 2^124. The
-      // sum is exact either way, so the path taken never changes a bit (R1-SPEC-005).
-      std::uint64_t mbits = 0, xbits = spectral::magnitude_bits(x[i].raw);
-      // Unsigned: a speculative sum may wrap (defined behaviour); it is used only when it cannot.
-      u128 sum = static_cast<u128>(static_cast<i128>(x[i].raw) * one);
+      // Fast path: plain i128 row sums, taken only when they provably cannot overflow. Every term
+      // (x_i 2^32, m_ik x_k, g_i c) is below 2^(mw + xw), mw and xw the bit widths of the row's
+      // largest m or g raw (at least 33, for the 2^32 factor) and largest x raw or c, so the
+      // len + 2 terms stay below 2^(mw + xw + bit_width(len + 2)); at most 126 bits means the
+      // sum fits. The sum is exact either way, so the path taken never changes a bit
+      // (R1-SPEC-005). Basis vectors carry raws up to ~2^52 (R1-SPEC-011): rows stay fast.
+      std::uint64_t mbits = 0;
+      for (std::size_t col = 0; col < count; ++col) {
+        const std::int64_t xi = x[i * ldx + col].raw;
+        sum[col] = static_cast<u128>(static_cast<i128>(xi) * one);
+        xbits[col] = spectral::magnitude_bits(xi);
+      }
       for (std::uint64_t k = gr.row_ptr[i]; k < gr.row_ptr[i + 1]; ++k) {
-        const std::int64_t xv = x[gr.col[k]].raw;
-        sum -= static_cast<u128>(static_cast<i128>(m[k].raw) * xv);
-        mbits |= spectral::magnitude_bits(m[k].raw);
-        xbits |= spectral::magnitude_bits(xv);
+        const std::int64_t mk = m[k].raw;
+        const fx::Q32* xr = x + static_cast<std::size_t>(gr.col[k]) * ldx;
+        mbits |= spectral::magnitude_bits(mk);
+        for (std::size_t col = 0; col < count; ++col) {
+          sum[col] -= static_cast<u128>(static_cast<i128>(mk) * xr[col].raw);
+          xbits[col] |= spectral::magnitude_bits(xr[col].raw);
+        }
       }
       if (!g.empty()) {
-        sum -= static_cast<u128>(static_cast<i128>(g[i].raw) * c);
         mbits |= spectral::magnitude_bits(g[i].raw);
-        xbits |= spectral::magnitude_bits(c);
+        for (std::size_t col = 0; col < count; ++col) {
+          sum[col] -= static_cast<u128>(static_cast<i128>(g[i].raw) * c[col]);
+          xbits[col] |= spectral::magnitude_bits(c[col]);
+        }
       }
-      if ((mbits >> 34) == 0 && (xbits >> 57) == 0) {
-        const i128 r = fx::detail::rne_shift(static_cast<i128>(sum), 32);
-        if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
-        y[i] = fx::Q32::from_raw(static_cast<std::int64_t>(r));
-        continue;
+      const int mw = std::max(static_cast<int>(std::bit_width(mbits)), 33);
+      const int lw = static_cast<int>(std::bit_width(gr.row_ptr[i + 1] - gr.row_ptr[i] + 2));
+      for (std::size_t col = 0; col < count; ++col) {
+        if (mw + static_cast<int>(std::bit_width(xbits[col])) + lw <= 126) {
+          const i128 r = fx::detail::rne_shift(static_cast<i128>(sum[col]), 32);
+          if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
+          y[i * ldy + col] = fx::Q32::from_raw(static_cast<std::int64_t>(r));
+          continue;
+        }
+        FastExact acc;
+        acc.add(static_cast<i128>(x[i * ldx + col].raw) * one);
+        for (std::uint64_t k = gr.row_ptr[i]; k < gr.row_ptr[i + 1]; ++k)
+          acc.add(-(static_cast<i128>(m[k].raw) * x[static_cast<std::size_t>(gr.col[k]) * ldx + col].raw));
+        if (!g.empty()) acc.add(-(static_cast<i128>(g[i].raw) * c[col]));
+        y[i * ldy + col] = fx::Q32::from_raw(acc.round_shift(32));
       }
-      FastExact acc;
-      acc.add(static_cast<i128>(x[i].raw) * one);
-      for (std::uint64_t k = gr.row_ptr[i]; k < gr.row_ptr[i + 1]; ++k)
-        acc.add(-(static_cast<i128>(m[k].raw) * x[gr.col[k]].raw));
-      if (!g.empty()) acc.add(-(static_cast<i128>(g[i].raw) * c));
-      y[i] = fx::Q32::from_raw(acc.round_shift(32));
     }
-  };
-  if (parallel && n >= spectral::kParallelMin) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, spectral::kBlock),
-                      [&](const tbb::blocked_range<std::size_t>& r) { rows(r.begin(), r.end()); });
-  } else {
-    rows(0, n);
-  }
+  });
 }
 
 template <>
-void SpectralOperator<double>::apply(const double* x, double* y, bool parallel) const {
+void SpectralOperator<double>::apply_block(const double* x, std::size_t ldx, double* y, std::size_t ldy,
+                                           std::size_t count, bool parallel) const {
   const Graph& gr = *graph;
-  double c = 0;
+  const bool par = parallel && n >= spectral::kParallelMin;
+  // c_col = the fixed pairwise dot of g and column col (R1-NUM-051).
+  std::vector<double> c(count, 0.0);
   if (!g.empty()) {
-    const std::span<const double> gs(g), xs(x, n);
-    c = parallel ? fx::parallel_pairwise_dot(gs, xs) : fx::pairwise_dot(gs, xs);
+    std::vector<double> xc(n);
+    for (std::size_t col = 0; col < count; ++col) {
+      for (std::size_t j = 0; j < n; ++j) xc[j] = x[j * ldx + col];
+      const std::span<const double> gs(g), xs(xc);
+      c[col] = par ? fx::parallel_pairwise_dot(gs, xs) : fx::pairwise_dot(gs, xs);
+    }
   }
   // Row i: S = the pairwise sum (R1-NUM-051) of m_ik x_k in column order; y_i = (x_i - S) - g_i c.
-  auto rows = [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(n, par, [&](std::size_t lo, std::size_t hi) {
     std::vector<double> p;
     for (std::size_t i = lo; i < hi; ++i) {
       const std::uint64_t b = gr.row_ptr[i], e_ = gr.row_ptr[i + 1];
       p.resize(e_ - b);
-      for (std::uint64_t k = b; k < e_; ++k) p[k - b] = m[k] * x[gr.col[k]];
-      double r = x[i] - fx::pairwise_sum(p);
-      if (!g.empty()) r = r - g[i] * c;
-      y[i] = r;
+      for (std::size_t col = 0; col < count; ++col) {
+        for (std::uint64_t k = b; k < e_; ++k) p[k - b] = m[k] * x[static_cast<std::size_t>(gr.col[k]) * ldx + col];
+        double r = x[i * ldx + col] - fx::pairwise_sum(p);
+        if (!g.empty()) r = r - g[i] * c[col];
+        y[i * ldy + col] = r;
+      }
     }
-  };
-  if (parallel && n >= spectral::kParallelMin) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, spectral::kBlock),
-                      [&](const tbb::blocked_range<std::size_t>& r) { rows(r.begin(), r.end()); });
-  } else {
-    rows(0, n);
-  }
+  });
 }
 
 // ---- Matrix Market export (R1-SPEC-070) -------------------------------------------------------------

@@ -35,7 +35,12 @@ struct SpectralOperator {
   std::vector<Scalar> trivial;   // D^(1/2) 1, squared length 2^e
 
   // y = L~ x (R1-SPEC-005): Q32, every row one exact sum rounded once; fp64, fixed pairwise rows.
-  void apply(const Scalar* x, Scalar* y, bool parallel = false) const;
+  void apply(const Scalar* x, Scalar* y, bool parallel = false) const { apply_block(x, 1, y, 1, 1, parallel); }
+  // The same for `count` vectors at once (one pass over the operator): column c of x is
+  // x[i * ldx + c], of y y[i * ldy + c]; each column's result is apply() of that column. x and y
+  // must not overlap.
+  void apply_block(const Scalar* x, std::size_t ldx, Scalar* y, std::size_t ldy, std::size_t count,
+                   bool parallel = false) const;
 };
 
 // rho by decision 4 (R1-SPEC-002): the forced value, else 0 for a connected graph and the mean

@@ -1,0 +1,536 @@
+// Block thick-restart Lanczos (a symmetric block Krylov-Schur method) with full
+// re-orthogonalisation and locking (R1-SPEC-020..035, R1-SPEC-061). Why a block: a Krylov space
+// grown from one vector holds one direction of each eigenspace, so it can never see a second copy
+// of a repeated eigenvalue; one grown from b random vectors holds min(b, multiplicity) of them
+// (proofs/spectral_multiplicity.md).
+#include "block_lanczos.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "jacobi.hpp"
+
+namespace r1::spectral {
+
+// Columns dst.. <- L~ columns src.. (count of each, dst and src runs disjoint). The operator
+// gathers a row of the source block per stored entry: from a compact n x count copy those rows
+// are 8 count bytes apart instead of a whole panel row, which keeps large graphs in cache. The
+// values are those of apply_block on the panel itself.
+template <class Scalar>
+void apply_compact(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, std::uint32_t src,
+                   std::uint32_t dst, std::size_t count) {
+  const std::size_t n = p.rows();
+  std::vector<Scalar> x(n * count), y(n * count);
+  for_row_blocks(n, ops.parallel(), [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::size_t c = 0; c < count; ++c) x[i * count + c] = p.at(i, src + c);
+  });
+  op.apply_block(x.data(), count, y.data(), count, count, ops.parallel());
+  for_row_blocks(n, ops.parallel(), [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::size_t c = 0; c < count; ++c) p.at(i, dst + c) = y[i * count + c];
+  });
+}
+
+template <class Scalar>
+void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, Cols xs, Cols ys,
+                    std::span<double> lambda, std::span<double> residual) {
+  const std::size_t k = xs.size();
+  for (std::size_t c = 0; c < k; ++c)
+    if (xs[c] != xs[0] + c || ys[c] != ys[0] + c) throw std::invalid_argument("rayleigh_block: columns must be runs");
+  apply_compact(op, ops, p, xs[0], ys[0], k);
+  for (std::size_t c = 0; c < k; ++c) {
+    const double xx = ops.dot(p, xs[c], xs[c]), xy = ops.dot(p, xs[c], ys[c]);
+    lambda[c] = xy / xx;
+    // r = L x - lambda x with one rounding per entry, then ||r|| / ||x|| (R1-SPEC-061).
+    const std::uint32_t out[1] = {ys[c]}, term[1] = {xs[c]};
+    const double coef[1] = {-lambda[c]};
+    ops.combine(p, out, out, term, coef);
+    residual[c] = std::sqrt(ops.dot(p, ys[c], ys[c]) / xx);
+  }
+}
+
+namespace {
+
+using Col = std::uint32_t;
+
+std::vector<Col> col_run(Col first, std::size_t count) {
+  std::vector<Col> v(count);
+  std::iota(v.begin(), v.end(), first);
+  return v;
+}
+
+// Two passes W = list c1 + V1 r1 and V1 = list c2 + V r2 compose to W = list c + V r with
+// c = c1 + c2 r1 and r = r2 r1 (c: rows per list column, r: b x b, row-major; sums in ascending
+// index order).
+void compose_passes(std::size_t b, const std::vector<double>& c1, const std::vector<double>& r1,
+                    const std::vector<double>& c2, const std::vector<double>& r2, std::vector<double>& c,
+                    std::vector<double>& r) {
+  const std::size_t nl = c1.size() / b;
+  c.assign(nl * b, 0.0);
+  for (std::size_t q = 0; q < nl; ++q)
+    for (std::size_t j = 0; j < b; ++j) {
+      double s = c1[q * b + j];
+      for (std::size_t i = 0; i < b; ++i) s = s + c2[q * b + i] * r1[i * b + j];
+      c[q * b + j] = s;
+    }
+  r.assign(b * b, 0.0);
+  for (std::size_t i = 0; i < b; ++i)
+    for (std::size_t j = 0; j < b; ++j) {
+      double s = 0.0;
+      for (std::size_t k = 0; k < b; ++k) s = s + r2[i * b + k] * r1[k * b + j];
+      r[i * b + j] = s;
+    }
+}
+
+template <class Scalar>
+class Solver {
+ public:
+  Solver(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, std::span<const Scalar> trivial,
+         const BlockLanczosConfig& cfg, const ProgressFn& progress)
+      : op_(op), ops_(ops), cfg_(cfg), progress_(progress), b_(cfg.block), m_(cfg.basis), keep_(cfg.keep),
+        base_(1 + cfg.want), next_(base_ + cfg.basis), scratch_(next_ + cfg.block),
+        p_(op.n, scratch_ + cfg.block) {
+    // b >= want is the canonical choice (R1-SPEC-021); narrower blocks are accepted for the test
+    // that shows why.
+    if (b_ == 0 || m_ % b_ != 0 || keep_ < cfg.want + b_ || keep_ + 2 * b_ > m_)
+      throw std::invalid_argument("block Lanczos: inconsistent configuration");
+    p_.set_column(0, trivial);
+    for (Col s = 1; s <= cfg.want; ++s) free_slots_.push_back(s);
+  }
+
+  LanczosOutcome<Scalar> run();
+
+  // The start block: b fresh vectors, counter dimensions 0, 1, ... (R1-SPEC-030), in the first
+  // basis columns.
+  void start() {
+    for (std::size_t j = 0; j < b_; ++j) fresh(base_ + static_cast<Col>(j), against(j));
+  }
+  std::vector<Scalar> basis_column(std::size_t j) const { return p_.copy_column(base_ + j); }
+
+ private:
+  struct Locked {
+    Col slot;
+    double lambda, residual;
+  };
+
+  // The columns every new basis vector is kept orthogonal to: the trivial vector, the locked
+  // ones in ascending order of their eigenvalue, and the first `upto` basis columns, in that
+  // order (R1-SPEC-022).
+  std::vector<Col> against(std::size_t upto) const {
+    std::vector<Col> list;
+    list.reserve(1 + locked_.size() + upto);
+    list.push_back(0);
+    for (const Locked& l : locked_) list.push_back(l.slot);
+    for (std::size_t j = 0; j < upto; ++j) list.push_back(base_ + static_cast<Col>(j));
+    return list;
+  }
+
+  // One classical Gram-Schmidt pass on column c: c <- c - sum_q <q, c> q, one rounding per entry.
+  void project(Col c, const std::vector<Col>& list) {
+    std::vector<double> h(list.size());
+    const Col cc[1] = {c};
+    ops_.dots(p_, list, cc, h);
+    for (double& x : h) x = -x;
+    ops_.combine(p_, cc, cc, list, h);
+  }
+
+  // Column c <- a fresh random unit vector orthogonal to `list` (R1-SPEC-030): counter dimension
+  // next_dim_, two projection passes; a draw that loses all but 2^-20 of its squared length to
+  // the projection is replaced by the next dimension. The basis never fills more than half the
+  // space (R1-SPEC-021), so a draw keeps most of its length; 64 failures in a row mean a bug.
+  void fresh(Col c, const std::vector<Col>& list) {
+    for (int attempt = 0; attempt < 64; ++attempt) {
+      ops_.random(p_, c, cfg_.seed, next_dim_++);
+      const double before = ops_.dot(p_, c, c);
+      project(c, list);
+      project(c, list);
+      const double after = ops_.dot(p_, c, c);
+      if (after > 0x1p-20 * before) {
+        ops_.scale(p_, c, 1.0 / std::sqrt(after));
+        return;
+      }
+    }
+    throw std::runtime_error("spectral: no fresh vector outside the basis after 64 draws");
+  }
+
+  void apply(Col src, Col dst, std::size_t count) {
+    apply_compact(op_, ops_, p_, src, dst, count);
+    matvecs_ += static_cast<std::uint32_t>(count);
+    ++passes_;
+  }
+
+  void orthonormalize_block(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r);
+  bool fused_pass(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r, bool second);
+  void robust_block(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r);
+
+  // The want-th smallest locked eigenvalue (locked_ is kept sorted).
+  double lambda_want() const { return locked_[cfg_.want - 1].lambda; }
+
+  // Adds column `col` to the locked pairs: into a free slot, or, when all `want` are taken, over
+  // the largest (the last in the stable ascending order), which it must beat. The list stays
+  // sorted ascending by a stable sort, so equal eigenvalues keep their locking order.
+  void offer(Col col, double lambda, double residual) {
+    Col slot = 0;
+    if (!free_slots_.empty()) {
+      slot = free_slots_.front();
+      free_slots_.erase(free_slots_.begin());
+    } else {
+      if (!(lambda < locked_.back().lambda)) return;
+      slot = locked_.back().slot;
+      locked_.pop_back();
+    }
+    ops_.copy(p_, slot, col);
+    locked_.push_back(Locked{slot, lambda, residual});
+    std::stable_sort(locked_.begin(), locked_.end(), [](const Locked& a, const Locked& b) { return a.lambda < b.lambda; });
+  }
+
+  const SpectralOperator<Scalar>& op_;
+  const PanelOps<Scalar>& ops_;
+  const BlockLanczosConfig& cfg_;
+  const ProgressFn& progress_;
+  const std::size_t b_, m_, keep_;
+  // Panel columns: 0 the trivial vector, 1..want the locked slots, [base_, base_ + m) the basis,
+  // [next_, next_ + b) the block that continues the basis after its last column, then b scratch.
+  const Col base_, next_, scratch_;
+  Panel<Scalar> p_;
+  std::vector<Locked> locked_;
+  std::vector<Col> free_slots_;
+  std::uint64_t next_dim_ = 0;
+  std::uint32_t matvecs_ = 0, passes_ = 0, robust_blocks_ = 0;
+};
+
+// The new block W = L V_s in columns w0.. (b of them) <- an orthonormal block V_(s+1), with
+// L V_s = list C + V_(s+1) R up to rounding (R1-SPEC-023..024). c is list.size() x b, r is b x b
+// upper triangular, both row-major. Two fused passes serve every step they can; the robust path
+// takes over from whatever a declined pass left (nothing is written by a declined pass).
+template <class Scalar>
+void Solver<Scalar>::orthonormalize_block(Col w0, const std::vector<Col>& list, std::vector<double>& c,
+                                          std::vector<double>& r) {
+  std::vector<double> c1, r1, c2, r2;
+  if (!fused_pass(w0, list, c1, r1, false)) {
+    ++robust_blocks_;
+    robust_block(w0, list, c, r);
+    return;
+  }
+  if (!fused_pass(w0, list, c2, r2, true)) {
+    ++robust_blocks_;
+    robust_block(w0, list, c2, r2);
+  }
+  compose_passes(b_, c1, r1, c2, r2, c, r);
+}
+
+// One fused block Gram-Schmidt pass (R1-SPEC-023): one sweep computes C = list^T W and
+// G = W^T W; the Gram matrix of W's part outside the list, G - C^T C, factors as R^T R (Cholesky,
+// fp64, fixed order); one combination forms V = W R^-1 - list (C R^-1), each entry one exact sum
+// rounded once, so V is normalised by the same rounding that projects it. Terms of the list whose
+// coefficients in C R^-1 are all at most kApplyFloor are left out (V is orthogonal to them within
+// that bound already). Coefficients of 8 or more are scaled by 2^-k into range and the result by
+// 2^k (exact). Declined, with nothing written, when a pivot is not clearly positive
+// (kPivotFloor: the Gram matrix's rounding could then dominate it), when a second pass finds a
+// column that lost over half its length (rounding noise, not a direction), or when k would
+// exceed kMaxScaleBits.
+template <class Scalar>
+bool Solver<Scalar>::fused_pass(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r,
+                                bool second) {
+  const std::size_t nl = list.size(), b = b_;
+  const std::vector<Col> w = col_run(w0, b);
+  std::vector<Col> qs = list;
+  qs.insert(qs.end(), w.begin(), w.end());
+  std::vector<double> g((nl + b) * b);
+  ops_.dots(p_, qs, w, g);
+  // gp = G - C^T C: the Gram matrix of W after the projection, sums over q ascending.
+  std::vector<double> gp(b * b);
+  for (std::size_t i = 0; i < b; ++i)
+    for (std::size_t j = 0; j < b; ++j) {
+      double s = g[(nl + i) * b + j];
+      for (std::size_t q = 0; q < nl; ++q) s = s - g[q * b + i] * g[q * b + j];
+      gp[i * b + j] = s;
+    }
+  // Cholesky gp = R^T R, R upper triangular, row by row.
+  std::vector<double> rr(b * b, 0.0);
+  for (std::size_t i = 0; i < b; ++i) {
+    double d = gp[i * b + i];
+    for (std::size_t k = 0; k < i; ++k) d = d - rr[k * b + i] * rr[k * b + i];
+    if (!(d > kPivotFloor * g[(nl + i) * b + i]) || !(d > 0)) return false;
+    if (second && 2 * d < 1) return false;
+    const double rii = std::sqrt(d);
+    rr[i * b + i] = rii;
+    for (std::size_t j = i + 1; j < b; ++j) {
+      double s = gp[i * b + j];
+      for (std::size_t k = 0; k < i; ++k) s = s - rr[k * b + i] * rr[k * b + j];
+      rr[i * b + j] = s / rii;
+    }
+  }
+  // R^-1 (upper triangular) by back substitution, column by column.
+  std::vector<double> ri(b * b, 0.0);
+  for (std::size_t j = 0; j < b; ++j) {
+    ri[j * b + j] = 1.0 / rr[j * b + j];
+    for (std::size_t i = j; i-- > 0;) {
+      double s = 0.0;
+      for (std::size_t k = i + 1; k <= j; ++k) s = s + rr[i * b + k] * ri[k * b + j];
+      ri[i * b + j] = -s / rr[i * b + i];
+    }
+  }
+  // Terms: W with R^-1, then the list columns that matter with -(C R^-1).
+  std::vector<Col> terms = w;
+  std::vector<double> coef(ri);
+  for (std::size_t q = 0; q < nl; ++q) {
+    std::vector<double> row(b);
+    bool apply = false;
+    for (std::size_t j = 0; j < b; ++j) {
+      double s = 0.0;
+      for (std::size_t k = 0; k <= j; ++k) s = s + g[q * b + k] * ri[k * b + j];
+      row[j] = -s;
+      apply = apply || std::fabs(s) > kApplyFloor;
+    }
+    if (!apply) continue;
+    terms.push_back(list[q]);
+    coef.insert(coef.end(), row.begin(), row.end());
+  }
+  // The smallest k with every |coefficient| 2^-k below 8.
+  double biggest = 0;
+  for (const double x : coef) biggest = std::max(biggest, std::fabs(x));
+  int k = 0;
+  while (!(std::ldexp(biggest, -k) < 8.0)) {
+    if (++k > kMaxScaleBits) return false;
+  }
+  for (double& x : coef) x = std::ldexp(x, -k);
+  ops_.combine(p_, w, {}, terms, coef);
+  if (k > 0)
+    for (const Col col : w) ops_.scale(p_, col, std::ldexp(1.0, k));
+  c.assign(g.begin(), g.begin() + static_cast<std::ptrdiff_t>(nl * b));
+  r = std::move(rr);
+  return true;
+}
+
+// The robust path (R1-SPEC-024): classical Gram-Schmidt against the list, Gram-Schmidt inside the
+// block with normalisation, both twice, the second pass at unit scale. A column left shorter than
+// the pass's floor (pass 1: kBreakdown; pass 2: 2^-1/2) was rounding noise, not a new direction:
+// it becomes a fresh random vector orthogonal to the list and the columns before it, and its
+// coupling is 0.
+template <class Scalar>
+void Solver<Scalar>::robust_block(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r) {
+  const std::size_t nl = list.size(), b = b_;
+  const std::vector<Col> w = col_run(w0, b);
+  // w <- w - list (list^T w), returning the coefficients (nl x b).
+  auto against_list = [&](std::vector<double>& coef) {
+    coef.assign(nl * b, 0.0);
+    ops_.dots(p_, list, w, coef);
+    std::vector<double> neg(coef);
+    for (double& x : neg) x = -x;
+    ops_.combine(p_, w, w, list, neg);
+  };
+  auto inside = [&](std::vector<double>& tri, bool second) {
+    tri.assign(b * b, 0.0);
+    for (std::size_t j = 0; j < b; ++j) {
+      const Col cj[1] = {w[j]};
+      std::vector<double> h(j);
+      if (j > 0) {
+        const std::span<const Col> before(w.data(), j);
+        ops_.dots(p_, before, cj, h);
+        std::vector<double> neg(h);
+        for (double& x : neg) x = -x;
+        ops_.combine(p_, cj, cj, before, neg);
+      }
+      const double nn = ops_.dot(p_, w[j], w[j]);
+      const bool noise = second ? 2 * nn < 1 : !(std::sqrt(nn) >= kBreakdown);
+      if (noise) {
+        std::vector<Col> l2 = list;
+        l2.insert(l2.end(), w.begin(), w.begin() + static_cast<std::ptrdiff_t>(j));
+        fresh(w[j], l2);
+        // Pass 1 keeps the coefficients against the columns before (w_j was their combination
+        // plus noise); pass 2 drops the whole column, whose first-pass part was the noise.
+        if (!second)
+          for (std::size_t i = 0; i < j; ++i) tri[i * b + j] = h[i];
+        continue;
+      }
+      const double len = std::sqrt(nn);
+      ops_.scale(p_, w[j], 1.0 / len);
+      for (std::size_t i = 0; i < j; ++i) tri[i * b + j] = h[i];
+      tri[j * b + j] = len;
+    }
+  };
+  std::vector<double> c1, c2, r1, r2;
+  against_list(c1);
+  inside(r1, false);
+  against_list(c2);
+  inside(r2, true);
+  compose_passes(b_, c1, r1, c2, r2, c, r);
+}
+
+template <class Scalar>
+LanczosOutcome<Scalar> Solver<Scalar>::run() {
+  LanczosOutcome<Scalar> out;
+  const double tol = cfg_.tolerance;
+  std::size_t k = 0;          // thick-restart Ritz vectors at the front of the basis
+  std::vector<double> theta;  // their Ritz values
+  start();
+  std::vector<double> c, r, r_last;
+  for (std::uint32_t cycle = 1;; ++cycle) {
+    out.cycles = cycle;
+    // ---- extend the basis block by block (R1-SPEC-022..024) ----
+    std::vector<double> h(m_ * m_, 0.0);  // upper triangle of the projected matrix
+    for (std::size_t i = 0; i < k; ++i) h[i * m_ + i] = theta[i];
+    std::size_t s = k, mm = 0;
+    for (;;) {
+      const bool last = s + 2 * b_ > m_;
+      const Col dst = last ? next_ : base_ + static_cast<Col>(s + b_);
+      apply(base_ + static_cast<Col>(s), dst, b_);
+      const std::vector<Col> list = against(s + b_);
+      orthonormalize_block(dst, list, c, r);
+      // Column block s of H: the coefficients against the basis (the trivial and locked
+      // coefficients are rounding noise and leave).
+      const std::size_t off = 1 + locked_.size();
+      for (std::size_t j = 0; j < s + b_; ++j)
+        for (std::size_t col = 0; col < b_; ++col) h[j * m_ + s + col] = c[(off + j) * b_ + col];
+      if (last) {
+        mm = s + b_;
+        r_last = r;
+        break;
+      }
+      s += b_;
+    }
+    // ---- Rayleigh-Ritz (R1-SPEC-025) ----
+    std::vector<double> hm(mm * mm);
+    for (std::size_t i = 0; i < mm; ++i)
+      for (std::size_t j = 0; j < mm; ++j) hm[i * mm + j] = h[i * m_ + j];
+    const JacobiResult eig = jacobi_eigen(mm, std::move(hm));
+    const std::size_t kk = std::min(keep_, mm);
+    {
+      std::vector<double> y(mm * kk);
+      for (std::size_t j = 0; j < mm; ++j)
+        for (std::size_t col = 0; col < kk; ++col) y[j * kk + col] = eig.vectors[j * mm + col];
+      const std::vector<Col> basis = col_run(base_, mm), ritz = col_run(base_, kk);
+      ops_.combine(p_, ritz, {}, basis, y);
+    }
+    // Residual estimates ||R_last s_last|| (R1-SPEC-027): the Ritz vector's residual lies in the
+    // continuation block, with coefficients R_last times its last b coordinates.
+    std::vector<double> estimate(kk);
+    for (std::size_t col = 0; col < kk; ++col) {
+      double ss = 0.0;
+      for (std::size_t i = 0; i < b_; ++i) {
+        double e = 0.0;
+        for (std::size_t j = 0; j < b_; ++j) e = e + r_last[i * b_ + j] * eig.vectors[(mm - b_ + j) * mm + col];
+        ss = ss + e * e;
+      }
+      estimate[col] = std::sqrt(ss);
+    }
+    // ---- locking (R1-SPEC-027..028) ----
+    std::size_t nl = 0;
+    for (bool stop = false; !stop && nl < kk;) {
+      std::size_t len = 0;
+      while (len < b_ && nl + len < kk && estimate[nl + len] <= tol) ++len;
+      if (len == 0) break;
+      std::vector<double> lam(len), res(len);
+      rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(nl), len), col_run(scratch_, len), lam, res);
+      matvecs_ += static_cast<std::uint32_t>(len);
+      ++passes_;
+      for (std::size_t i = 0; i < len; ++i) {
+        if (!(res[i] <= tol) || (locked_.size() >= cfg_.want && !(lam[i] < lambda_want() - tol))) {
+          stop = true;
+          break;
+        }
+        offer(base_ + static_cast<Col>(nl), lam[i], res[i]);
+        ++nl;
+      }
+    }
+    report(progress_, "spectral embedding: converged pairs", std::min<std::size_t>(locked_.size(), cfg_.want), cfg_.want);
+    // ---- acceptance (R1-SPEC-031) ----
+    // Every wanted pair is locked and the smallest Ritz value left in the basis is not below the
+    // want-th: this block Krylov space holds nothing better.
+    if (locked_.size() >= cfg_.want && !(eig.values[nl] < lambda_want() - tol)) {
+      out.converged = true;
+      break;
+    }
+    if (cycle >= cfg_.max_cycles) {
+      // Out of cycles (R1-SPEC-034): the best Ritz vectors fill the missing pairs, with their
+      // honest residuals.
+      for (std::size_t i = nl; i < kk; i += b_) {
+        const std::size_t len = std::min(b_, kk - i);
+        std::vector<double> lam(len), res(len);
+        rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(i), len), col_run(scratch_, len), lam, res);
+        matvecs_ += static_cast<std::uint32_t>(len);
+        ++passes_;
+        for (std::size_t j = 0; j < len; ++j) offer(base_ + static_cast<Col>(i + j), lam[j], res[j]);
+      }
+      break;
+    }
+    // ---- thick restart (R1-SPEC-026) ----
+    k = kk - nl;
+    {
+      // The kept Ritz vectors to the front, the continuation block after them: one sweep.
+      std::vector<Col> src = col_run(base_ + static_cast<Col>(nl), k), dst = col_run(base_, k + b_);
+      const std::vector<Col> next = col_run(next_, b_);
+      src.insert(src.end(), next.begin(), next.end());
+      ops_.move(p_, dst, src);
+    }
+    theta.assign(eig.values.begin() + static_cast<std::ptrdiff_t>(nl), eig.values.begin() + static_cast<std::ptrdiff_t>(kk));
+  }
+  out.matvecs = matvecs_;
+  out.passes = passes_;
+  out.robust_blocks = robust_blocks_;
+  for (const Locked& l : locked_) out.pairs.push_back(Eigenpair<Scalar>{p_.copy_column(l.slot), l.lambda, l.residual});
+  return out;
+}
+
+}  // namespace
+
+BlockLanczosConfig canonical_config(std::uint32_t n, std::uint32_t want, const SpectralParams& params, std::uint64_t seed) {
+  // Default cap on restarts when SpectralParams::max_restarts is 0 (R1-SPEC-034): far above the
+  // cycles any measured graph needed (spec/spectral.md, performance), so it only stops a solve
+  // that cannot reach the tolerance.
+  constexpr std::uint32_t kDefaultMaxRestarts = 1000;
+  BlockLanczosConfig cfg;
+  cfg.want = want;
+  // Blocks as wide as the wanted pairs: every copy of an eigenvalue among them is in reach
+  // (R1-SPEC-021, proofs/spectral_multiplicity.md).
+  cfg.block = want;
+  // m = basis block steps of b columns, at most half the deflated space (so fresh vectors always
+  // find room), and room for the kept Ritz vectors plus two blocks.
+  const std::uint32_t room = (n - 1 - want) / (2 * cfg.block);
+  cfg.basis = cfg.block * std::min(params.basis, room);
+  // Ritz vectors kept at a restart: 3/8 of the basis, at least want + b (R1-SPEC-026).
+  cfg.keep = std::max<std::uint32_t>(want + cfg.block, cfg.basis * 3 / 8);
+  cfg.tolerance = params.tolerance;
+  cfg.max_cycles = (params.max_restarts == 0 ? kDefaultMaxRestarts : params.max_restarts) + 1;
+  cfg.seed = seed;
+  return cfg;
+}
+
+template <class Scalar>
+LanczosOutcome<Scalar> block_lanczos(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops,
+                                     std::span<const Scalar> trivial, const BlockLanczosConfig& config,
+                                     const ProgressFn& progress) {
+  Solver<Scalar> s(op, ops, trivial, config, progress);
+  return s.run();
+}
+
+template <class Scalar>
+std::vector<std::vector<Scalar>> start_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops,
+                                             std::span<const Scalar> trivial, const BlockLanczosConfig& config) {
+  const ProgressFn none;
+  Solver<Scalar> s(op, ops, trivial, config, none);
+  s.start();
+  std::vector<std::vector<Scalar>> out;
+  for (std::size_t j = 0; j < config.block; ++j) out.push_back(s.basis_column(j));
+  return out;
+}
+
+template std::vector<std::vector<fx::Q32>> start_block(const SpectralOperator<fx::Q32>&, const PanelOps<fx::Q32>&,
+                                                       std::span<const fx::Q32>, const BlockLanczosConfig&);
+template std::vector<std::vector<double>> start_block(const SpectralOperator<double>&, const PanelOps<double>&,
+                                                      std::span<const double>, const BlockLanczosConfig&);
+template void rayleigh_block(const SpectralOperator<fx::Q32>&, const PanelOps<fx::Q32>&, Panel<fx::Q32>&, Cols, Cols,
+                             std::span<double>, std::span<double>);
+template void rayleigh_block(const SpectralOperator<double>&, const PanelOps<double>&, Panel<double>&, Cols, Cols,
+                             std::span<double>, std::span<double>);
+template LanczosOutcome<fx::Q32> block_lanczos(const SpectralOperator<fx::Q32>&, const PanelOps<fx::Q32>&,
+                                               std::span<const fx::Q32>, const BlockLanczosConfig&, const ProgressFn&);
+template LanczosOutcome<double> block_lanczos(const SpectralOperator<double>&, const PanelOps<double>&,
+                                              std::span<const double>, const BlockLanczosConfig&, const ProgressFn&);
+
+}  // namespace r1::spectral
