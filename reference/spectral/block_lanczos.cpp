@@ -129,13 +129,19 @@ class Solver {
     return list;
   }
 
-  // One classical Gram-Schmidt pass on column c: c <- c - sum_q <q, c> q, one rounding per entry.
+  // One classical Gram-Schmidt pass on the columns ws against `list`: w <- w - sum_q <q, w> q, one
+  // rounding per entry; coef receives the inner products (list.size() x ws.size(), row-major).
+  void project(Cols ws, const std::vector<Col>& list, std::vector<double>& coef) {
+    coef.assign(list.size() * ws.size(), 0.0);
+    ops_.dots(p_, list, ws, coef);
+    std::vector<double> neg(coef);
+    for (double& x : neg) x = -x;
+    ops_.combine(p_, ws, ws, list, neg);
+  }
   void project(Col c, const std::vector<Col>& list) {
-    std::vector<double> h(list.size());
     const Col cc[1] = {c};
-    ops_.dots(p_, list, cc, h);
-    for (double& x : h) x = -x;
-    ops_.combine(p_, cc, cc, list, h);
+    std::vector<double> unused;
+    project(cc, list, unused);
   }
 
   // Column c <- a fresh random unit vector orthogonal to `list` (R1-SPEC-030): counter dimension
@@ -314,16 +320,8 @@ bool Solver<Scalar>::fused_pass(Col w0, const std::vector<Col>& list, std::vecto
 // coupling is 0.
 template <class Scalar>
 void Solver<Scalar>::robust_block(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r) {
-  const std::size_t nl = list.size(), b = b_;
+  const std::size_t b = b_;
   const std::vector<Col> w = col_run(w0, b);
-  // w <- w - list (list^T w), returning the coefficients (nl x b).
-  auto against_list = [&](std::vector<double>& coef) {
-    coef.assign(nl * b, 0.0);
-    ops_.dots(p_, list, w, coef);
-    std::vector<double> neg(coef);
-    for (double& x : neg) x = -x;
-    ops_.combine(p_, w, w, list, neg);
-  };
   auto inside = [&](std::vector<double>& tri, bool second) {
     tri.assign(b * b, 0.0);
     for (std::size_t j = 0; j < b; ++j) {
@@ -355,9 +353,9 @@ void Solver<Scalar>::robust_block(Col w0, const std::vector<Col>& list, std::vec
     }
   };
   std::vector<double> c1, c2, r1, r2;
-  against_list(c1);
+  project(w, list, c1);
   inside(r1, false);
-  against_list(c2);
+  project(w, list, c2);
   inside(r2, true);
   compose_passes(b_, c1, r1, c2, r2, c, r);
 }
