@@ -139,7 +139,7 @@ void add_spectrum(CLI::App& app, Runner& selected) {
   cmd->add_option("--domain", o->domain, "q32 (canonical, default) or fp64");
   cmd->add_option("--rho", o->rho, "regularisation rho >= 0 (default: 0 if connected, else the mean weighted degree)");
   cmd->add_option("--tolerance", o->tolerance, "residual target ||L u - lambda u|| (default 1e-9)");
-  cmd->add_option("--basis", o->basis, "block Krylov steps per restart cycle (5 vectors each), 4..200 (default 32)");
+  cmd->add_option("--basis", o->basis, "block Krylov steps per restart cycle (7 vectors each), 4..200 (default 27)");
   cmd->add_option("--max-restarts", o->max_restarts, "restart cap (default 0: the solver's own, 1000)");
   cmd->add_flag("--parallel", o->parallel, "TBB kernels (bit-identical to the serial default)");
   cmd->add_flag("--json", o->json, "print one JSON object");

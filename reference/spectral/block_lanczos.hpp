@@ -15,9 +15,9 @@ namespace r1::spectral {
 
 struct BlockLanczosConfig {
   std::uint32_t want = 5;      // eigenpairs above the deflated trivial one
-  std::uint32_t block = 5;     // b: vectors per block, at least `want` (R1-SPEC-021)
-  std::uint32_t basis = 160;   // m: basis columns per cycle, a multiple of b (R1-SPEC-021)
-  std::uint32_t keep = 60;     // Ritz vectors kept at a thick restart, want + b <= keep <= m - 2b (R1-SPEC-026)
+  std::uint32_t block = 7;     // b: vectors per block, at least `want` (R1-SPEC-021)
+  std::uint32_t basis = 189;   // m: basis columns per cycle, a multiple of b (R1-SPEC-021)
+  std::uint32_t keep = 70;     // Ritz vectors kept at a thick restart, want + b <= keep <= m - 2b (R1-SPEC-026)
   double tolerance = 1e-9;     // residual target (R1-SPEC-028)
   std::uint32_t max_cycles = 1001;
   std::uint64_t seed = 0;      // counter-RNG key of start and fresh vectors (R1-SPEC-030)

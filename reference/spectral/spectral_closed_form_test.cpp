@@ -253,7 +253,7 @@ TEST(SpectralClosedForm, SpidersWithTwinArms) {
 // the wanted eigenspaces of the 6x6x6 torus (six-dimensional), Q_7 (seven), the 4-arm spider
 // (three) and K_40,57 (95), taken from Eigen's dense solver at the closed-form eigenvalue. The
 // smallest singular value of Z^T X0 (Z an orthonormal eigenspace basis, X0 the unit start block,
-// at most 5 of them needed) is compared with sqrt(dim / n), its typical size for a random block.
+// its b = 7 columns; at most 5 directions needed) is compared with sqrt(dim / n), its typical size for a random block.
 TEST(SpectralMultiplicity, StartBlockSeesEveryWantedEigenspace) {
   struct Space {
     std::string name;
@@ -295,14 +295,16 @@ TEST(SpectralMultiplicity, StartBlockSeesEveryWantedEigenspace) {
     ASSERT_TRUE(op.is_ok());
     const r1::spectral::PanelOps<r1::fx::Q32> ops(sp.graph.n, op->e, false, 48);
     const auto trivial = r1::spectral::scaled_trivial(sp.graph, op->rho, op->e, 48);
-    const auto x0 = r1::spectral::start_block<r1::fx::Q32>(*op, ops, trivial, r1::spectral::BlockLanczosConfig{});
-    ASSERT_EQ(x0.size(), 5u);
-    Eigen::MatrixXd x(sp.graph.n, 5);
-    for (int c = 0; c < 5; ++c) {
+    const r1::spectral::BlockLanczosConfig cfg;
+    const auto x0 = r1::spectral::start_block<r1::fx::Q32>(*op, ops, trivial, cfg);
+    const Eigen::Index b = cfg.block;
+    ASSERT_EQ(x0.size(), cfg.block);
+    Eigen::MatrixXd x(sp.graph.n, b);
+    for (Eigen::Index c = 0; c < b; ++c) {
       for (std::uint32_t i = 0; i < sp.graph.n; ++i) x(i, c) = std::ldexp(static_cast<double>(x0[c][i].raw), -48);
       x.col(c).normalize();
     }
-    EXPECT_LT((x.transpose() * x - Eigen::MatrixXd::Identity(5, 5)).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((x.transpose() * x - Eigen::MatrixXd::Identity(b, b)).cwiseAbs().maxCoeff(), 1e-12);
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(sp.basis.transpose() * x);
     const double smallest = svd.singularValues()(std::min<Eigen::Index>(sp.basis.cols(), 5) - 1);
     const double typical = std::sqrt(static_cast<double>(sp.basis.cols()) / sp.graph.n);
@@ -312,8 +314,8 @@ TEST(SpectralMultiplicity, StartBlockSeesEveryWantedEigenspace) {
 
 // The argument's other half: a block narrower than the multiplicity cannot see every copy. With
 // one vector per block, the ring's second copies stay out of reach and the solve returns the
-// first five distinct frequencies instead of each of them twice; with the canonical width of 5
-// every copy is found. Proves the closed-form tests above can fail.
+// first five distinct frequencies instead of each of them twice; with the canonical width of 7
+// (any width of at least 5) every copy is found. Proves the closed-form tests above can fail.
 TEST(SpectralMultiplicity, OneVectorPerBlockMissesTheSecondCopies) {
   const Family f = ring(300);
   auto op = r1::spectral_operator_q32(f.graph, r1::SpectralParams{});
@@ -321,7 +323,7 @@ TEST(SpectralMultiplicity, OneVectorPerBlockMissesTheSecondCopies) {
   const r1::spectral::PanelOps<r1::fx::Q32> ops(f.graph.n, op->e, false, 48);
   const auto trivial = r1::spectral::scaled_trivial(f.graph, op->rho, op->e, 48);
   const auto want = wanted(f.spectrum);
-  for (const std::uint32_t b : {1u, 5u}) {
+  for (const std::uint32_t b : {1u, 7u}) {
     SCOPED_TRACE(b);
     r1::spectral::BlockLanczosConfig cfg;
     cfg.block = b;

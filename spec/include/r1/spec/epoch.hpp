@@ -47,7 +47,7 @@ struct Focus {
 
 struct SpectralParams {
   std::optional<double> rho;      // regularisation (decision 4); unset = auto: 0 if connected, else mean weighted degree
-  std::uint32_t basis = 32;       // block Krylov steps per restart cycle, 5 vectors each (R-1.0 3.2: k = 32; R1-SPEC-021)
+  std::uint32_t basis = 27;       // block Krylov steps per restart cycle, 7 vectors each (R1-SPEC-021)
   double tolerance = 1e-9;        // residual target ||L u - lambda u|| for the wanted pairs
   std::uint32_t max_restarts = 0; // 0 = the solver's documented default
 };
@@ -61,7 +61,7 @@ struct Spectrum {
   std::array<std::vector<Scalar>, 5> u;       // u_2..u_6, unit 2-norm, per particle; missing ones all 0
   std::uint32_t found = 0;                    // how many of u_2..u_6 exist (n - 1 when n < 7)
   // Work done, for the manifest: restarts, vectors L~ was applied to, and block applications
-  // (passes over the operator, each for a block of up to 5 vectors) (R1-SPEC-063).
+  // (passes over the operator, each for a block of up to 7 vectors) (R1-SPEC-063).
   std::uint32_t restarts = 0, matvecs = 0, passes = 0;
 };
 
