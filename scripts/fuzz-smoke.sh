@@ -2,12 +2,18 @@
 # Runs every libFuzzer executable in BUILD_DIR/fuzz for SECONDS each, starting from its committed
 # corpus (read-only: new inputs go to a scratch directory). A crash fails the run.
 set -euo pipefail
-build=${1:-build-fuzz}
+build=${1:-build-san}
 secs=${2:-15}
 root=$(cd "$(dirname "$0")/.." && pwd)
-shopt -s nullglob
-targets=("$build"/fuzz/r1_fuzz_*)
-if [ ${#targets[@]} -eq 0 ]; then echo "fuzz-smoke: no fuzz targets built in $build" >&2; exit 1; fi
+# The targets are the corpora's names (every target has one, R1-TEST-012): the build tree also
+# holds test executables (r1_fuzz_replay) and CMake files under the same prefix.
+targets=()
+for dir in "$root"/fuzz/corpus/*/; do
+  exe="$build/fuzz/r1_fuzz_$(basename "$dir")"
+  if [ ! -x "$exe" ]; then echo "fuzz-smoke: $exe is not built (configure $build with -DR1_FUZZ=ON)" >&2; exit 1; fi
+  targets+=("$exe")
+done
+if [ ${#targets[@]} -eq 0 ]; then echo "fuzz-smoke: no corpora under $root/fuzz/corpus" >&2; exit 1; fi
 for exe in "${targets[@]}"; do
   name=$(basename "$exe"); name=${name#r1_fuzz_}
   scratch=$(mktemp -d)

@@ -4,14 +4,14 @@
 set -euo pipefail
 
 # Why each package is here:
-#   build: compiler, CMake, Ninja; clang-14 + its runtime for libFuzzer and the sanitizer build
+#   build: compiler, CMake, Ninja, ccache; clang-14 + its runtime for libFuzzer and the sanitizer build
 #   numerics: Boost.Multiprecision (references in property tests), Eigen + Spectra (eigensolvers)
 #   input/CLI: toml++, CLI11, nlohmann-json; TBB for the parallel paths
 #   images: OpenImageIO (+ the tools and OpenCV core its CMake config asks for), OpenColorIO,
 #     DejaVu fonts for the T1 labels OpenImageIO draws
 #   tests/bench: GoogleTest/GoogleMock, RapidCheck, Google Benchmark, SciPy for peer comparisons
 PACKAGES=(
-  g++ cmake ninja-build make pkg-config
+  g++ cmake ninja-build make pkg-config ccache
   clang-14 libclang-rt-14-dev lld
   libboost-dev libeigen3-dev libspectra-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libtbb-dev

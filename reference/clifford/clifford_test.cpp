@@ -248,12 +248,12 @@ RC_GTEST_PROP(Clifford, ShiftedProductsMatchNaiveReference, ()) {
   RC_ASSERT(y.is_ok());
   for (std::uint32_t i = 0; i < k.n; ++i)
     for (std::uint32_t o = 0; o < k.d; ++o) {
-      long double acc = p.bias[o];
+      long double acc = static_cast<long double>(p.bias[o]);
       for (std::size_t b = k.shifts.size(); b-- > 0;)
         for (std::uint32_t ch = k.d; ch-- > 0;) {
           const std::size_t row_inner = 2 * b * k.d + ch, row_wedge = row_inner + k.d;
-          acc += static_cast<long double>(naive_inner(h, c, i, ch, k.shifts[b])) * p.w.v[row_inner * k.d + o];
-          acc += static_cast<long double>(naive_wedge(h, c, i, ch, k.shifts[b])) * p.w.v[row_wedge * k.d + o];
+          acc += static_cast<long double>(naive_inner(h, c, i, ch, k.shifts[b])) * static_cast<long double>(p.w.v[row_inner * k.d + o]);
+          acc += static_cast<long double>(naive_wedge(h, c, i, ch, k.shifts[b])) * static_cast<long double>(p.w.v[row_wedge * k.d + o]);
         }
       RC_ASSERT(std::fabs(static_cast<long double>(y->at(i, o)) - acc) <= 1e-9L);
     }

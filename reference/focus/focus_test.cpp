@@ -479,24 +479,24 @@ TEST(FocusOperators, DiffusionAndSpringsAgainstDense) {
   std::vector<Q32> dq, sq;
   ops->diffusion(phi, dq);
   ops->springs(phi, sq);
-  const long double t = p.teleport.to_double(), mu = p.mu.to_double();
+  const long double t = static_cast<long double>(p.teleport.to_double()), mu = static_cast<long double>(p.mu.to_double());
   const VecL u = d.degree / d.degree.sum();
   long double dangling = 0;
   for (std::uint32_t q = 0; q < g.n; ++q)
-    if (d.a0.row(q).sum() == 0) dangling += phi[q].to_double();
+    if (d.a0.row(q).sum() == 0) dangling += static_cast<long double>(phi[q].to_double());
   for (std::uint32_t q = 0; q < g.n; ++q) {
     long double y = 0, r = 0;
     for (std::uint32_t s = 0; s < g.n; ++s) {
       const long double out = d.a0.row(s).sum();
-      if (out > 0) y += phi[s].to_double() * d.a0(s, q) / out;
-      r += d.w(q, s) * phi[s].to_double();
+      if (out > 0) y += static_cast<long double>(phi[s].to_double()) * d.a0(s, q) / out;
+      r += d.w(q, s) * static_cast<long double>(phi[s].to_double());
     }
     const long double dq_exact = (1 - t) * (y + dangling * u(q)) + t * u(q);
     const long double sq_exact = (mu / g.n + r) / (mu + d.degree(q));
     // Shares of P and u are within 1 ulp of exact; three roundings of 1/2 ulp; out-degree <= 2.
-    EXPECT_LE(std::abs(static_cast<long double>(dq[q].to_double()) - dq_exact), 4.5L * ULP) << q;
+    EXPECT_LE(std::abs(static_cast<long double>(dq[q].to_double()) - dq_exact), 4.5L * static_cast<long double>(ULP)) << q;
     // a = RNE(mu / n) and the final division: 1 ulp.
-    EXPECT_LE(std::abs(static_cast<long double>(sq[q].to_double()) - sq_exact), 1.0L * ULP) << q;
+    EXPECT_LE(std::abs(static_cast<long double>(sq[q].to_double()) - sq_exact), 1.0L * static_cast<long double>(ULP)) << q;
   }
 }
 
@@ -546,14 +546,14 @@ PageRankError pagerank_error(const Graph& g, const TriKernelParams& p) {
     r.l1 = 1e300;
     return r;
   }
-  const long double t = p.teleport.to_double();
+  const long double t = static_cast<long double>(p.teleport.to_double());
   const VecL ref = pagerank(g, t);
   std::uint64_t max_out = 0;
   for (std::uint32_t i = 0; i < g.n; ++i) max_out = std::max(max_out, g.out_ptr[i + 1] - g.out_ptr[i]);
   r.bound = 2 * std::pow(1 - static_cast<double>(t), q->steps) +
             (5.0 * g.n + static_cast<double>(max_out) + 2) * ULP / static_cast<double>(t);
   for (std::uint32_t i = 0; i < g.n; ++i) {
-    const double e = std::abs(static_cast<double>(q->phi[i].to_double() - ref(i)));
+    const double e = std::abs(static_cast<double>(static_cast<long double>(q->phi[i].to_double()) - ref(i)));
     r.l1 += e;
     r.max_abs = std::max(r.max_abs, e);
   }
@@ -678,7 +678,7 @@ TEST(FocusIteration, SyntropyAndCyberank) {
   const auto q = r1::compute_focus_q32(g, TriKernelParams{}, 0.0);
   ASSERT_TRUE(q.is_ok());
   long double j = 0;
-  for (const Q32 x : q->phi) j += x.to_double() * std::log(static_cast<long double>(g.n) * x.to_double());
+  for (const Q32 x : q->phi) j += static_cast<long double>(x.to_double()) * std::log(static_cast<long double>(g.n) * static_cast<long double>(x.to_double()));
   // Each of n logarithms carries <= (1/2 + 2^-20) ulp, weighted by phi (sum 1), plus ln n's and
   // the final rounding: a few ulp.
   EXPECT_NEAR(q->syntropy, static_cast<double>(j), 4 * ULP);

@@ -137,7 +137,7 @@ TEST(ImageDiff, NearestRankPercentiles) {
   set_px(b, w, 30, 0, 20, 20, 200);
   std::vector<float> heat;
   const DiffStats st = r1::render::diff_srgb8(a, b, w, h, {}, &heat);
-  std::vector<double> d = {heat[5], heat[17], heat[30]};
+  std::vector<double> d = {static_cast<double>(heat[5]), static_cast<double>(heat[17]), static_cast<double>(heat[30])};
   std::sort(d.begin(), d.end());
   EXPECT_EQ(static_cast<float>(st.p95_2000), static_cast<float>(d[0]));
   EXPECT_EQ(static_cast<float>(st.p99_2000), static_cast<float>(d[2]));

@@ -104,7 +104,7 @@ TEST(Srgb, DecodeTableIsTheClosedFormCurve) {
 
 TEST(Srgb, EveryCodeRoundTripsThroughLinear) {
   for (int c = 0; c < 256; ++c)
-    EXPECT_EQ(code_of(srgb_encode(r1::render::srgb8_to_linear(static_cast<std::uint8_t>(c)))), c) << "code " << c;
+    EXPECT_EQ(code_of(srgb_encode(static_cast<double>(r1::render::srgb8_to_linear(static_cast<std::uint8_t>(c))))), c) << "code " << c;
 }
 
 // ---- tone map (R1-RND-082) ----
@@ -206,7 +206,7 @@ TEST(Display, CompositesPremultipliedOverBackground) {
   EXPECT_TRUE(near(b[0], 0.18)) << int(b[0]);
   EXPECT_TRUE(near(b[1], 0.5)) << int(b[1]);
   EXPECT_EQ(b[2], 0);
-  for (int k = 0; k < 3; ++k) EXPECT_TRUE(near(b[3 + k], bg[k])) << k << " " << int(b[3 + k]);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(near(b[3 + k], static_cast<double>(bg[k]))) << k << " " << int(b[3 + k]);
   EXPECT_TRUE(near(b[6], 0.25 + 0.5 * 0.5)) << int(b[6]);
   EXPECT_TRUE(near(b[7], 0.5 * 0.04)) << int(b[7]);
   EXPECT_TRUE(near(b[8], 0.5 * 0.2)) << int(b[8]);

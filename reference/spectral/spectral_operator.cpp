@@ -98,11 +98,7 @@ Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const Sp
   op.rho = rho;
   const std::size_t n = g.n;
   std::vector<u128> d(n);
-  u128 sum_d = 0;
-  for (std::uint32_t i = 0; i < g.n; ++i) {
-    d[i] = regularised_degree(g, i, rho);
-    sum_d += d[i];
-  }
+  for (std::uint32_t i = 0; i < g.n; ++i) d[i] = regularised_degree(g, i, rho);
   // M_ij = RNE(2^32 w / sqrt(D_i D_j)) = RNE(sqrt(2^64 w^2 / (D_i D_j))) (R1-SPEC-003): w <= 2^32,
   // so 2^64 w^2 <= 2^128; D_i D_j < 2^128 because each D < 2^64 for any graph r1 can hold.
   op.m.resize(g.col.size());
