@@ -5,7 +5,7 @@ CMAKE_FLAGS ?=
 R1 := build/cli/r1
 OUT ?= out
 
-.PHONY: all deps configure build run test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench golden conform
+.PHONY: all deps configure build run layering test test-fast test-asan fuzz-build fuzz-smoke install-test clean bench golden conform
 
 all: build
 
@@ -37,12 +37,19 @@ run: configure
 	@$(R1) render $(OUT)/crystal.epoch --distance 12000 --size 960x540 -o $(OUT)/views/crystal-far.png
 	@echo "views              $(OUT)/views/ (crystal-000..003.png: orbit; crystal-far.png: the T-infinity far field)"
 
-test: build
+# The include direction first (shared/DESIGN.md; spec/backends.md R1-BKD-015): a bad include
+# fails in a second, before any build.
+layering:
+	@/usr/bin/python3 scripts/check-layering.py
+
+test: layering
+	@$(MAKE) --no-print-directory build
 	@ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
 	@$(MAKE) --no-print-directory test-asan
 	@$(MAKE) --no-print-directory fuzz-smoke
 
-test-fast: build
+test-fast: layering
+	@$(MAKE) --no-print-directory build
 	@ctest --test-dir build --output-on-failure -j $(JOBS) -LE slow --timeout 900
 
 test-asan: deps

@@ -80,21 +80,4 @@ std::string choose_backend_name(std::string_view requested, std::string* source)
   return "reference";
 }
 
-Result<Epoch> run_epoch(Backend& b, const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
-                        const ProgressFn& progress) {
-  EpochStages st;
-  st.spectral = [&b](const Graph& g, const EpochOptions& o, const ProgressFn& p) { return b.spectral(g, o, p); };
-  st.focus = [&b](const Graph& g, const EpochOptions& o, double l2, const ProgressFn& p) { return b.focus(g, o, l2, p); };
-  st.frame = [&b](const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) {
-    return b.frame(s, c, a, an);
-  };
-  st.encoding = [&b](const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
-                     const EncodingOptions& o, const ProgressFn& p) { return b.encoding(s, g, f, c, o, p); };
-  st.hierarchy = [&b](const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi, std::span<const Color> col,
-                      std::span<const ParticleId> ids, const HierarchyOptions& o, const ProgressFn& p) {
-    return b.hierarchy(pos, phi, col, ids, o, p);
-  };
-  return r1::run_epoch(snapshot, graph, options, progress, &st);
-}
-
 }  // namespace r1::backends

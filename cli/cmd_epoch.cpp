@@ -9,6 +9,7 @@
 #include "timing.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
+#include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
 
 namespace r1::cli {
@@ -67,9 +68,10 @@ Result<EpochOptions> epoch_options(const EpochCliOptions& c) {
     o.spectral.rho = r;
   }
   if (c.tolerance) o.spectral.tolerance = *c.tolerance;
-  o.anchor_path = c.anchor;
+  // The stages take values, not paths (R1-BKD-014): the anchor and the overlay are read here.
+  R1_TRY(load_anchor(o, c.anchor));
   o.encoding.overlay = c.overlay;
-  o.encoding.custom_file = c.overlay_file;
+  if (c.overlay == "custom") R1_TRY(load_custom_overlay(o.encoding, c.overlay_file));
   o.encoding.role_shapes = !c.no_role_shapes;
   o.parallel = c.parallel;
   return o;

@@ -8,7 +8,9 @@
 
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/hierarchy.hpp"
+#include "r1/reference/epoch.hpp"
 #include "r1/reference/input_file.hpp"
+#include "render/image.hpp"
 
 namespace r1::conformance {
 
@@ -85,7 +87,7 @@ Result<GraphRun> run_graph(backends::Backend& b, const Suite& suite, const Suite
   ro.timings = false;
   for (const SuiteView& sv : suite.views) {
     if (!draw) break;
-    R1_ASSIGN(render::Image img, b.render(run.epoch, sv.view, ro, nullptr));
+    R1_ASSIGN(render::Image img, b.render(run.epoch, sv.view, ro, nullptr, {}));
     if (img.width != sv.view.width || img.height != sv.view.height)
       return Status::internal(std::string(b.name()) + " rendered " + std::to_string(img.width) + "x" +
                               std::to_string(img.height) + " for a " + std::to_string(sv.view.width) + "x" +

@@ -127,6 +127,14 @@ Result<Anchor> read_anchor(const std::string& path) {
   return parse_anchor(file->bytes(), file->name());
 }
 
+Status load_anchor(EpochOptions& options, const std::string& path) {
+  if (path.empty()) return Status::ok();
+  R1_ASSIGN(Anchor anchor, read_anchor(path));
+  options.anchor = std::move(anchor);
+  options.anchor_name = path;
+  return Status::ok();
+}
+
 Result<hemera::Digest> anchor_digest(const Anchor& anchor) {
   R1_ASSIGN(const std::string bytes, anchor_bytes(anchor));
   return hemera::root_hash(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));

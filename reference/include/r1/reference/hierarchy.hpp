@@ -12,6 +12,7 @@
 
 #include "r1/fixedpoint/hemera.hpp"
 #include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
 #include "r1/spec/progress.hpp"
 #include "r1/spec/snapshot.hpp"
 #include "r1/spec/status.hpp"
@@ -19,12 +20,6 @@
 namespace r1 {
 
 using Color = std::array<std::uint8_t, 3>;
-
-struct HierarchyOptions {
-  // The finest clustering radius r_0 as a Q32 raw (scene units, >= 0). Unset: chosen from the data
-  // by the search of R1-HIER-030..033.
-  std::optional<std::int64_t> radius0_raw;
-};
 
 // Builds the hierarchy of R1-HIER-001..043. pos, phi, color and ids are per particle in canonical
 // order (all the same length, at least 1); phi raws are > 0 and sum to exactly 2^32; ids are
