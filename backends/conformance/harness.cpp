@@ -26,50 +26,6 @@ Result<std::string> read_all(const fs::path& p) {
 
 std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
 
-// Topology bytes back into the parts compare() reads: per level the clusters' parents and
-// children and every particle's cluster (R1-CONF-010).
-Result<Hierarchy> parse_topology(std::string_view b, const std::string& name) {
-  std::size_t at = 0;
-  auto u32 = [&](std::uint32_t& v) {
-    if (b.size() - at < 4) return false;
-    v = 0;
-    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(b[at + i])) << (8 * i);
-    at += 4;
-    return true;
-  };
-  const std::string tag = "r1topo1\n";
-  if (b.substr(0, tag.size()) != tag) return Status::input(name + ": byte 0: not r1 topology bytes");
-  at = tag.size();
-  auto truncated = [&] { return Status::input(name + ": byte " + std::to_string(at) + ": truncated topology"); };
-  std::uint32_t n = 0;
-  if (!u32(n)) return truncated();
-  Hierarchy h;
-  for (int l = 0; l < kLevels; ++l) {
-    std::uint32_t count = 0;
-    if (!u32(count)) return truncated();
-    // Each cluster needs at least 8 bytes: a count larger than the rest of the file is malformed.
-    if (count > (b.size() - at) / 8) return Status::input(name + ": byte " + std::to_string(at) + ": cluster count too large");
-    h.levels[l].resize(count);
-    for (std::uint32_t c = 0; c < count; ++c) {
-      ClusterNode& node = h.levels[l][c];
-      node.level = static_cast<std::uint32_t>(l);
-      node.id = c;
-      std::uint32_t k = 0;
-      if (!u32(node.parent) || !u32(k)) return truncated();
-      if (k > kMaxChildren) return Status::input(name + ": byte " + std::to_string(at) + ": more than 16 children");
-      node.children.resize(k);
-      for (auto& ch : node.children)
-        if (!u32(ch)) return truncated();
-    }
-    if (n > (b.size() - at) / 4) return truncated();
-    h.cluster_of[l].resize(n);
-    for (auto& c : h.cluster_of[l])
-      if (!u32(c)) return truncated();
-  }
-  if (at != b.size()) return Status::input(name + ": byte " + std::to_string(at) + ": trailing bytes");
-  return h;
-}
-
 bool is_golden_dir(const fs::path& dir) { return manifest_format_is(dir, kGoldenFormat); }
 
 }  // namespace
@@ -231,7 +187,7 @@ Result<GoldenSet> read_golden(const fs::path& dir) {
       R1_ASSIGN(e.topology, read_all(dir / tfile));
       if (hex(hemera::hash(e.topology)) != g.at("topology").at("digest").get<std::string>())
         return Status::input((dir / tfile).string() + ": digest does not match the manifest");
-      R1_ASSIGN(e.hierarchy, parse_topology(e.topology, (dir / tfile).string()));
+      R1_ASSIGN(e.hierarchy, format::parse_topology_bytes(e.topology, (dir / tfile).string()));
       const std::string pfile = g.at("positions").at("file").get<std::string>();
       R1_ASSIGN(const std::string pos, read_all(dir / pfile));
       if (hex(hemera::hash(pos)) != g.at("positions").at("digest").get<std::string>())

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/hierarchy.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/epoch_options.hpp"
 #include "r1/spec/progress.hpp"
@@ -29,15 +30,8 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
                                   std::span<const Color> color, std::span<const ParticleId> ids,
                                   const HierarchyOptions& options = {}, const ProgressFn& progress = {});
 
-// The canonical little-endian serialisation of R1-HIER-050; its Hemera hash is the topology
-// digest (R1-HIER-051) that 12.1 requires to be bit-identical across implementations.
-std::string hierarchy_bytes(const Hierarchy& h);
-hemera::Digest hierarchy_digest(const Hierarchy& h);
-
-// Reads bytes written by hierarchy_bytes (R1-HIER-052): every field bounds-checked, a malformed
-// or truncated input is an input error naming `name` and the byte offset. The structure is not
-// validated against particle data here: check_hierarchy does that.
-Result<Hierarchy> parse_hierarchy_bytes(std::string_view bytes, const std::string& name);
+// The canonical bytes (hierarchy_bytes, parse_hierarchy_bytes, hierarchy_digest) are the format
+// library's: r1/format/hierarchy.hpp, included here.
 
 // Clusters per level, finest first.
 std::array<std::size_t, kLevels> hierarchy_counts(const Hierarchy& h);
