@@ -20,22 +20,30 @@ std::string_view domain_name(Domain d) {
 }
 
 const std::vector<BackendInfo>& registered_backends() {
-  // Built once; the order is the listing order of `r1 backends` and the differential fuzzer's.
+  // Built once; the order is the listing order of `r1 conform --list` and the differential
+  // fuzzer's. Which backends beyond reference and null exist is CMake's choice (R1_BACKEND_*
+  // options, R1-BKD-005).
   static const std::vector<BackendInfo> all = [] {
     std::vector<BackendInfo> v;
     v.push_back({"reference", "the cpu-reference: single-threaded, Q32 epoch, fp64 frame (the oracle)", true,
                  [] { return make_reference_backend(false); }});
+#if R1_BACKEND_PARALLEL
     v.push_back({"parallel", "the reference stages with TBB row loops in spectral and focus (R1-SPEC-071, R1-FOC-090)",
                  true, [] { return make_reference_backend(true); }});
+#endif
+#if R1_BACKEND_FP64
     // Not expected to conform: where eigenvalues repeat (ring, torus) the fp64 and Q32 solvers
     // return different bases of the same eigenspace, so positions and topology differ (README).
     v.push_back({"fp64", "the reference stages with spectral and focus in IEEE doubles (R1-EPO-003)", false,
                  [] { return make_reference_backend(false, true); }});
+#endif
     v.push_back({"null", "well-formed but wrong results: the suite must fail it", false, [] { return make_null_backend(); }});
+#if R1_BACKEND_SELFTEST
     for (SelfTestFault f : {SelfTestFault::kPosition, SelfTestFault::kTopology, SelfTestFault::kHue}) {
       v.push_back({std::string(self_test_name(f)), std::string(self_test_summary(f)), false,
                    [f] { return make_self_test_backend(f); }});
     }
+#endif
     return v;
   }();
   return all;

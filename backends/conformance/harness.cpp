@@ -116,12 +116,12 @@ bool reproduces(const GraphComparison& c) {
   return true;
 }
 
-Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const fs::path& dir) {
+Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const fs::path& dir, const std::string& backend) {
   AtomicDirectory out(dir, is_golden_dir);
   R1_TRY(out.open());
   json m;
   m["format"] = kGoldenFormat;
-  m["generator"] = "r1 golden (backend reference)";
+  m["generator"] = "r1 golden (backend " + backend + ")";
   m["suite"] = {{"name", suite.name}, {"file", "suite.toml"}, {"digest", hex(hemera::hash(suite.text))},
                 {"width", suite.width}, {"height", suite.height}};
   R1_TRY(out.write("suite.toml", suite.text));

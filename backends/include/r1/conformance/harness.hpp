@@ -57,7 +57,9 @@ inline constexpr const char* kGoldenFormat = "r1-golden-1";
 // Runs the suite with the reference backend and writes DIR atomically: suite.toml, manifest.json,
 // and per graph NAME.topology.bin, NAME.positions.bin, NAME.VIEW.png and NAME.VIEW.exr.
 // `runs` receives the reference runs (for a change report against an earlier set).
-Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const std::filesystem::path& dir);
+// `backend` names the backend that made the runs in the manifest's generator line.
+Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const std::filesystem::path& dir,
+                    const std::string& backend = "reference");
 
 struct GoldenSet {
   Suite suite;
