@@ -1,8 +1,9 @@
-// Suite runs, comparisons and golden sets (R1-CONF-030..046).
+// Suite runs, comparisons and golden sets (R1-CONF-030..047).
 #include "r1/conformance/harness.hpp"
 
 #include <chrono>
 #include <cstdio>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -27,6 +28,60 @@ Result<std::string> read_all(const fs::path& p) {
 std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
 
 bool is_golden_dir(const fs::path& dir) { return manifest_format_is(dir, kGoldenFormat); }
+
+// The manifest keys of a snapshot graph's files (R1-CONF-043), with the part of LoadedSnapshot each names.
+struct FileKey {
+  const char* key;
+  const SuiteFile LoadedSnapshot::*file;
+};
+constexpr FileKey kFileKeys[] = {{"snapshot_file", &LoadedSnapshot::file},
+                                 {"titles_file", &LoadedSnapshot::titles},
+                                 {"crystal_file", &LoadedSnapshot::crystal}};
+
+// A golden set's copy of a snapshot graph's files (R1-CONF-043): the same relative paths under
+// the set, so its suite.toml finds them there.
+Status copy_files(const SuiteGraph& g, AtomicDirectory& out, std::set<std::string>& written, json& entry) {
+  if (!g.loaded) return Status::internal("suite graph " + g.name + ": its snapshot file was not loaded");
+  for (const FileKey& k : kFileKeys) {
+    const SuiteFile& f = (*g.loaded).*k.file;
+    if (f.path.empty()) continue;
+    entry[k.key] = {{"file", f.path}, {"digest", hex(hemera::hash(f.bytes))}};
+    if (!written.insert(f.path).second) continue;  // two entries may share a file
+    std::error_code ec;
+    fs::create_directories((out.temp_path() / f.path).parent_path(), ec);
+    if (ec) return Status::output((out.temp_path() / f.path).parent_path().string() + ": cannot create: " + ec.message());
+    R1_TRY(out.write(f.path, f.bytes));
+  }
+  return Status::ok();
+}
+
+// Before anything is computed (R1-CONF-044): a snapshot graph's files under the set match the
+// manifest byte for byte (checked as read, before they are parsed)...
+Status check_file_bytes(const SuiteGraph& g, const LoadedSnapshot& files, const std::string& suite_source, const json& entry) {
+  const std::string at = g.where(suite_source);
+  for (const FileKey& k : kFileKeys) {
+    const SuiteFile& f = files.*k.file;
+    if (f.path.empty() != !entry.contains(k.key))
+      return Status::input(at + ": " + k.key + " of the manifest does not match suite.toml");
+    if (f.path.empty()) continue;
+    if (entry.at(k.key).at("file").get<std::string>() != f.path)
+      return Status::input(at + ": " + f.path + ": the manifest names another file");
+    if (hex(hemera::hash(f.bytes)) != entry.at(k.key).at("digest").get<std::string>())
+      return Status::input(at + ": " + f.path + ": digest does not match the manifest (the file was changed)");
+  }
+  return Status::ok();
+}
+
+// ...and the snapshot read from them has the recorded snapshot digest (R1-IN-040).
+Status check_snapshot_digest(const SuiteGraph& g, const std::string& suite_source, const json& entry) {
+  const std::string at = g.where(suite_source);
+  const std::string want = entry.at("snapshot_digest").get<std::string>();
+  const std::string got = hex(snapshot_digest(g.loaded->snapshot));
+  if (got != want)
+    return Status::input(at + ": " + g.file + ": snapshot digest " + got.substr(0, 16) + " does not match the manifest's " +
+                         want.substr(0, 16));
+  return Status::ok();
+}
 
 }  // namespace
 
@@ -125,6 +180,7 @@ Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const
   m["suite"] = {{"name", suite.name}, {"file", "suite.toml"}, {"digest", hex(hemera::hash(suite.text))},
                 {"width", suite.width}, {"height", suite.height}};
   R1_TRY(out.write("suite.toml", suite.text));
+  std::set<std::string> copied;
   json graphs = json::array();
   for (std::size_t gi = 0; gi < runs.size(); ++gi) {
     const GraphRun& r = runs[gi];
@@ -133,12 +189,16 @@ Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const
     R1_TRY(out.write(r.name + ".topology.bin", topo));
     R1_TRY(out.write(r.name + ".positions.bin", pos));
     json g = {{"name", r.name},
-              {"gen", suite.graphs[gi].gen},
               {"particles", r.epoch.ids.size()},
               {"snapshot_digest", hex(r.epoch.snapshot_digest)},
               {"topology", {{"file", r.name + ".topology.bin"}, {"digest", hex(hemera::hash(topo))}}},
               {"hierarchy_digest", hex(hierarchy_digest(r.epoch.hierarchy))},
               {"positions", {{"file", r.name + ".positions.bin"}, {"digest", hex(hemera::hash(pos))}}}};
+    if (suite.graphs[gi].is_file()) {
+      R1_TRY(copy_files(suite.graphs[gi], out, copied, g));
+    } else {
+      g["gen"] = suite.graphs[gi].gen;
+    }
     json views = json::array();
     for (std::size_t v = 0; v < suite.views.size(); ++v) {
       const std::string base = r.name + "." + suite.views[v].name;
@@ -178,6 +238,15 @@ Result<GoldenSet> read_golden(const fs::path& dir) {
     const json& graphs = m.at("graphs");
     if (!graphs.is_array() || graphs.size() != set.suite.graphs.size())
       return Status::input(mpath + ": graphs do not match suite.toml");
+    for (std::size_t gi = 0; gi < graphs.size(); ++gi)
+      if (graphs[gi].at("name").get<std::string>() != set.suite.graphs[gi].name)
+        return Status::input(mpath + ": graph " + graphs[gi].at("name").get<std::string>() + " is not the suite's");
+    // Snapshot graphs: their copies under DIR, checked against the manifest (R1-CONF-044).
+    R1_TRY(load_suite_files(set.suite, dir, [&](std::size_t gi, const LoadedSnapshot& files) {
+      return check_file_bytes(set.suite.graphs[gi], files, set.suite.source, graphs[gi]);
+    }));
+    for (std::size_t gi = 0; gi < graphs.size(); ++gi)
+      if (set.suite.graphs[gi].is_file()) R1_TRY(check_snapshot_digest(set.suite.graphs[gi], set.suite.source, graphs[gi]));
     for (std::size_t gi = 0; gi < graphs.size(); ++gi) {
       const json& g = graphs[gi];
       Expected e;
