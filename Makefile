@@ -7,7 +7,7 @@ CMAKE_FLAGS ?=
 R1 := build/cli/r1
 OUT ?= out
 
-.PHONY: all deps configure build run test test-fast test-san test-asan san-build fuzz-build fuzz-smoke install-test clean bench golden conform
+.PHONY: all deps configure build run layering test test-fast test-san test-asan san-build fuzz-build fuzz-smoke install-test clean bench golden conform
 
 all: build
 
@@ -39,9 +39,15 @@ run: configure
 	@$(R1) render $(OUT)/crystal.epoch --distance 12000 --size 960x540 -o $(OUT)/views/crystal-far.png
 	@echo "views              $(OUT)/views/ (crystal-000..003.png: orbit; crystal-far.png: the T-infinity far field)"
 
+# The include direction first (shared/DESIGN.md; spec/backends.md R1-BKD-015): a bad include
+# fails in a second, before any build (after deps, which brings python3 to a bare machine).
+layering: deps
+	@/usr/bin/python3 scripts/check-layering.py
+
 test:
 	@rm -f build/phases.log
 	@scripts/phase.sh deps scripts/install-deps.sh
+	@scripts/phase.sh layering /usr/bin/python3 scripts/check-layering.py
 	@scripts/phase.sh build $(MAKE) --no-print-directory build
 	@scripts/phase.sh tests ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
 	@scripts/phase.sh san-build $(MAKE) --no-print-directory san-build
@@ -50,7 +56,8 @@ test:
 	@echo "make test: passed; phase times:" >&2
 	@scripts/phase-summary.sh
 
-test-fast: build
+test-fast: layering
+	@$(MAKE) --no-print-directory build
 	@ctest --test-dir build --output-on-failure -j $(JOBS) -LE slow --timeout 900
 
 # One clang tree for the sanitizers and libFuzzer (R1-TEST-040): ASan + UBSan at -O1 (the tests run

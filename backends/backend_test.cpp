@@ -11,6 +11,7 @@
 #include "r1/conformance/compare.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/reference/clifford.hpp"
+#include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
@@ -157,7 +158,7 @@ TEST(Backend, NullIsWellFormedButWrong) {
   render::View v;
   v.width = 32;
   v.height = 18;
-  auto img = (*b)->render(*e, v, {}, nullptr);
+  auto img = (*b)->render(*e, v, {}, nullptr, {});
   ASSERT_TRUE(img.is_ok());
   EXPECT_EQ(img->width, 32);
   for (float x : img->rgba) ASSERT_EQ(x, 0.0f);

@@ -20,22 +20,30 @@ std::string_view domain_name(Domain d) {
 }
 
 const std::vector<BackendInfo>& registered_backends() {
-  // Built once; the order is the listing order of `r1 backends` and the differential fuzzer's.
+  // Built once; the order is the listing order of `r1 conform --list` and the differential
+  // fuzzer's. Which backends beyond reference and null exist is CMake's choice (R1_BACKEND_*
+  // options, R1-BKD-005).
   static const std::vector<BackendInfo> all = [] {
     std::vector<BackendInfo> v;
     v.push_back({"reference", "the cpu-reference: single-threaded, Q32 epoch, fp64 frame (the oracle)", true,
                  [] { return make_reference_backend(false); }});
+#if R1_BACKEND_PARALLEL
     v.push_back({"parallel", "the reference stages with TBB row loops in spectral and focus (R1-SPEC-071, R1-FOC-090)",
                  true, [] { return make_reference_backend(true); }});
+#endif
+#if R1_BACKEND_FP64
     // Not expected to conform: where eigenvalues repeat (ring, torus) the fp64 and Q32 solvers
     // return different bases of the same eigenspace, so positions and topology differ (README).
     v.push_back({"fp64", "the reference stages with spectral and focus in IEEE doubles (R1-EPO-003)", false,
                  [] { return make_reference_backend(false, true); }});
+#endif
     v.push_back({"null", "well-formed but wrong results: the suite must fail it", false, [] { return make_null_backend(); }});
+#if R1_BACKEND_SELFTEST
     for (SelfTestFault f : {SelfTestFault::kPosition, SelfTestFault::kTopology, SelfTestFault::kHue}) {
       v.push_back({std::string(self_test_name(f)), std::string(self_test_summary(f)), false,
                    [f] { return make_self_test_backend(f); }});
     }
+#endif
     return v;
   }();
   return all;
@@ -78,23 +86,6 @@ std::string choose_backend_name(std::string_view requested, std::string* source)
   }
   if (source) *source = "default";
   return "reference";
-}
-
-Result<Epoch> run_epoch(Backend& b, const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
-                        const ProgressFn& progress) {
-  EpochStages st;
-  st.spectral = [&b](const Graph& g, const EpochOptions& o, const ProgressFn& p) { return b.spectral(g, o, p); };
-  st.focus = [&b](const Graph& g, const EpochOptions& o, double l2, const ProgressFn& p) { return b.focus(g, o, l2, p); };
-  st.frame = [&b](const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) {
-    return b.frame(s, c, a, an);
-  };
-  st.encoding = [&b](const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
-                     const EncodingOptions& o, const ProgressFn& p) { return b.encoding(s, g, f, c, o, p); };
-  st.hierarchy = [&b](const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi, std::span<const Color> col,
-                      std::span<const ParticleId> ids, const HierarchyOptions& o, const ProgressFn& p) {
-    return b.hierarchy(pos, phi, col, ids, o, p);
-  };
-  return r1::run_epoch(snapshot, graph, options, progress, &st);
 }
 
 }  // namespace r1::backends

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "backend_option.hpp"
 #include "commands.hpp"
 #include "r1/backends/registry.hpp"
 #include "r1/conformance/conform.hpp"
@@ -15,7 +16,8 @@ namespace r1::cli {
 namespace {
 
 struct ConformCliOptions {
-  std::string backend, suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000";
+  BackendOption backend;
+  std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000";
   std::string out = "r1_conformance.toml";
   bool list = false;
 };
@@ -43,9 +45,10 @@ Status run_conform(const ConformCliOptions& o) {
       std::printf("%-18s %s%s\n", b.name.c_str(), b.summary.c_str(), b.expected_conformant ? "" : " [fails by design]");
     return Status::ok();
   }
-  std::string source;
-  const std::string name = backends::choose_backend_name(o.backend, &source);
-  R1_ASSIGN(auto backend, backends::make_backend(name));
+  R1_ASSIGN(const ChosenBackend chosen, o.backend.make());
+  const std::string& name = chosen.name;
+  const std::string& source = chosen.source;
+  backends::Backend* backend = chosen.backend.get();
   conformance::ConformOptions co;
   R1_ASSIGN(co.checks, conformance::parse_checks(o.checks));
   R1_ASSIGN(co.tinf_sizes, parse_sizes(o.tinf_sizes));
@@ -96,7 +99,7 @@ Status run_conform(const ConformCliOptions& o) {
 void add_conform(CLI::App& app, Runner& selected) {
   auto o = std::make_shared<ConformCliOptions>();
   auto* cmd = app.add_subcommand("conform", "run the R-1.0 section 15 checks on a backend and write r1_conformance.toml");
-  cmd->add_option("--backend", o->backend, "backend to certify (default: $R1_BACKEND, else reference)");
+  o->backend.add_to(*cmd);
   cmd->add_option("--suite", o->suite, "suite file (default: the built-in small suite)");
   cmd->add_option("--golden", o->golden, "compare with this golden set (from r1 golden) instead of running the reference");
   cmd->add_option("--checks", o->checks, "checks to run: all, or a list of topo,pos,pix,fps,tinf (default all)");

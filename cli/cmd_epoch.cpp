@@ -1,14 +1,17 @@
-// r1 epoch SNAPSHOT -o DIR: the canonical epoch and its summary (R1-EPO-001..013).
+// r1 epoch SNAPSHOT [--backend NAME] -o DIR: the canonical epoch, through the chosen backend's
+// stages, and its summary (R1-EPO-001..013, R1-BKD-016).
 #include <chrono>
 #include <cstdio>
 #include <optional>
 
+#include "backend_option.hpp"
 #include "commands.hpp"
 #include "input_options.hpp"
 #include "progress.hpp"
 #include "timing.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
+#include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
 
 namespace r1::cli {
@@ -18,6 +21,7 @@ namespace {
 struct EpochCliOptions {
   std::string snapshot, out;
   InputOptions input;
+  BackendOption backend;
   std::string domain = "q32";
   // Tri-kernel parameters as decimal text, parsed exactly into Q32 (empty: default).
   std::string lambda_d, lambda_s, lambda_h, teleport, mu, tau, eps;
@@ -67,9 +71,10 @@ Result<EpochOptions> epoch_options(const EpochCliOptions& c) {
     o.spectral.rho = r;
   }
   if (c.tolerance) o.spectral.tolerance = *c.tolerance;
-  o.anchor_path = c.anchor;
+  // The stages take values, not paths (R1-BKD-014): the anchor and the overlay are read here.
+  R1_TRY(load_anchor(o, c.anchor));
   o.encoding.overlay = c.overlay;
-  o.encoding.custom_file = c.overlay_file;
+  if (c.overlay == "custom") R1_TRY(load_custom_overlay(o.encoding, c.overlay_file));
   o.encoding.role_shapes = !c.no_role_shapes;
   o.parallel = c.parallel;
   return o;
@@ -109,13 +114,14 @@ void print_summary(const Epoch& e, const std::string& dir, double total_s) {
 Status run_epoch_cli(const EpochCliOptions& c) {
   if (c.out.empty()) return Status::input("epoch: say where to write the epoch (-o DIR)");
   R1_ASSIGN(EpochOptions o, epoch_options(c));
+  R1_ASSIGN(const ChosenBackend chosen, c.backend.make());
   ProgressLine progress;
   const auto t0 = std::chrono::steady_clock::now();
   R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
   R1_ASSIGN(const Snapshot s, read_snapshot(c.snapshot, ro));
   R1_ASSIGN(const Graph g, build_graph(s, progress.sink()));
   const double read_s = seconds_since(t0);
-  R1_ASSIGN(Epoch e, run_epoch(s, g, o, progress.sink()));
+  R1_ASSIGN(Epoch e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
   e.timings.insert(e.timings.begin(), {"read", read_s});
   const auto t2 = std::chrono::steady_clock::now();
   EpochWriteOptions wo;
@@ -135,6 +141,7 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_option("SNAPSHOT", c->snapshot, "snapshot: .graph, TSV/CSV edge list or Matrix Market")->required();
   cmd->add_option("-o,--out", c->out, "output directory (written atomically)");
   c->input.add_to(*cmd);
+  c->backend.add_to(*cmd);
   cmd->add_option("--domain", c->domain, "numeric domain: q32 (canonical, default) or fp64");
   cmd->add_option("--lambda-d", c->lambda_d, "diffusion weight (0.5)");
   cmd->add_option("--lambda-s", c->lambda_s, "springs weight (0.3)");

@@ -1,9 +1,10 @@
-// r1 golden [--suite FILE] (-o DIR | --check DIR): the golden set of a suite from the reference
-// backend, with a report of what changed against the set already at DIR (spec/conformance.md
-// R1-CONF-040..046).
+// r1 golden [--suite FILE] [--backend NAME] (-o DIR | --check DIR): the golden set of a suite from
+// the reference backend (or the chosen one), with a report of what changed against the set already
+// at DIR (spec/conformance.md R1-CONF-040..047).
 #include <cstdio>
 #include <iostream>
 
+#include "backend_option.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "r1/backends/registry.hpp"
@@ -15,6 +16,7 @@ namespace {
 
 struct GoldenOptions {
   std::string suite, out, check;
+  BackendOption backend;
 };
 
 Result<conformance::Suite> load_suite(const std::string& path) {
@@ -24,6 +26,7 @@ Result<conformance::Suite> load_suite(const std::string& path) {
 
 Status run_golden(const GoldenOptions& o) {
   if (o.out.empty() == o.check.empty()) return Status::input("golden: give exactly one of -o DIR and --check DIR");
+  R1_ASSIGN(const ChosenBackend chosen, o.backend.make());
   // --check compares with the set's own suite; -o writes the suite given (default: small).
   std::optional<conformance::GoldenSet> old;
   const std::string old_dir = o.check.empty() ? o.out : o.check;
@@ -44,12 +47,15 @@ Status run_golden(const GoldenOptions& o) {
   }
   std::printf("golden: suite %s (%zu graphs x %zu views, %dx%d) from %s\n", suite.name.c_str(), suite.graphs.size(),
               suite.views.size(), suite.width, suite.height, suite.source.c_str());
-  R1_ASSIGN(auto reference, backends::make_backend("reference"));
+  // The reference by default; another backend writes a set of its own results, or is checked
+  // against a set bit for bit (R1-CONF-047).
+  backends::Backend& backend = *chosen.backend;
+  if (chosen.name != "reference") std::printf("golden: backend %s (chosen by %s)\n", chosen.name.c_str(), chosen.source.c_str());
   std::vector<conformance::GraphRun> runs;
   std::size_t changed = 0;
   for (std::size_t gi = 0; gi < suite.graphs.size(); ++gi) {
     ProgressLine line;
-    R1_ASSIGN(conformance::GraphRun run, conformance::run_graph(*reference, suite, suite.graphs[gi], o.check.empty(), line.sink()));
+    R1_ASSIGN(conformance::GraphRun run, conformance::run_graph(backend, suite, suite.graphs[gi], o.check.empty(), line.sink()));
     line.finish();
     std::printf("  %-14s %7zu particles  epoch %6.2f s  16 views %6.2f s  topology %.16s\n", run.name.c_str(),
                 run.epoch.ids.size(), run.epoch_s, run.render_s,
@@ -67,7 +73,7 @@ Status run_golden(const GoldenOptions& o) {
     if (changed > 0) verdict_exit() = 4;
     return Status::ok();
   }
-  R1_TRY(conformance::write_golden(suite, runs, o.out));
+  R1_TRY(conformance::write_golden(suite, runs, o.out, chosen.name));
   if (old) {
     std::printf("golden: wrote %s (%zu of %zu graphs changed against the set it replaced)\n", o.out.c_str(), changed,
                 suite.graphs.size());
@@ -85,6 +91,7 @@ void add_golden(CLI::App& app, Runner& selected) {
   cmd->add_option("--suite", o->suite, "suite file (default: the built-in small suite, spec/suites/small.toml)");
   cmd->add_option("-o,--output", o->out, "directory to write (replaced atomically; the changes against the set there are printed)");
   cmd->add_option("--check", o->check, "compare the reference with the golden set in DIR; exit 4 when it does not reproduce");
+  o->backend.add_to(*cmd);
   cmd->callback([o, &selected] { selected = [o] { return run_golden(*o); }; });
 }
 

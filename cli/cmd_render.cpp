@@ -1,5 +1,5 @@
-// r1 render EPOCH_DIR [--view FILE | --orbit K | --eye X Y Z --target X Y Z] -o OUT.png|OUT.exr:
-// the reference frame renderer (spec/render.md R1-RND-090..094).
+// r1 render EPOCH_DIR [--view FILE | --orbit K | --eye X Y Z --target X Y Z] [--backend NAME]
+// -o OUT.png|OUT.exr: the chosen backend's frame stage (spec/render.md R1-RND-090..094, R1-BKD-016).
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "backend_option.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "r1/reference/atomic_file.hpp"
@@ -26,6 +27,7 @@ struct RenderCliOptions {
   std::vector<double> eye, target, up;
   double fov = 0, time = 0, distance = 0;
   bool no_edges = false, no_labels = false, no_field = false, quiet = false;
+  BackendOption backend;
 };
 
 Status parse_size(const std::string& text, render::View& v) {
@@ -76,10 +78,13 @@ Status run_render(const RenderCliOptions& c) {
   if (c.eye.empty() != c.target.empty()) return Status::input("render: --eye and --target go together");
   if (!(c.distance >= 0 && c.distance <= 1e7)) return Status::input("render: --distance must lie in [0, 1e7] scene units");
 
+  R1_ASSIGN(const ChosenBackend chosen, c.backend.make());
   ProgressLine progress;
   const auto t0 = std::chrono::steady_clock::now();
   R1_ASSIGN(const Epoch e, read_epoch(c.dir));
   if (e.ids.empty()) return Status::input(c.dir + ": the epoch has no particles");
+  // The cameras are placed from the reference's scene summary (centroid, fitted distance); the
+  // frames are the chosen backend's (R1-BKD-016).
   const render::Scene scene = render::make_scene(e);
 
   render::View base;
@@ -120,7 +125,7 @@ Status run_render(const RenderCliOptions& c) {
     const ProgressFn rows = [&](std::string_view, std::uint64_t d, std::uint64_t t) {
       if (sink) sink(stage, d, t);
     };
-    R1_ASSIGN(render::Image img, render::render_frame(scene, views[k], {}, &st, rows));
+    R1_ASSIGN(render::Image img, chosen.backend->render(e, views[k], {}, &st, rows));
     images.push_back(std::move(img));
     stats.push_back(st);
   }
@@ -155,6 +160,7 @@ void add_render(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-labels", c->no_labels, "draw no T1 labels");
   cmd->add_flag("--no-field", c->no_field, "no T-infinity field (sub-pixel particles vanish)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
+  c->backend.add_to(*cmd);
   cmd->callback([c, &selected] { selected = [c] { return run_render(*c); }; });
 }
 

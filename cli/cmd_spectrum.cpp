@@ -1,5 +1,5 @@
-// r1 spectrum FILE: the spectral embedding alone, for inspection, timing and the eigsh peer
-// comparison (R1-SPEC-060..064, R1-SPEC-070..071).
+// r1 spectrum FILE [--backend NAME]: the spectral embedding alone, for inspection, timing and the
+// eigsh peer comparison (R1-SPEC-060..064, R1-SPEC-070..071, R1-BKD-016).
 #include <bit>
 #include <chrono>
 #include <cstdio>
@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "backend_option.hpp"
 #include "commands.hpp"
 #include "input_options.hpp"
 #include "progress.hpp"
@@ -23,6 +24,7 @@ namespace {
 struct SpectrumOptions {
   std::string file;
   InputOptions input;
+  BackendOption backend;
   std::string domain = "q32";
   std::optional<double> rho;
   double tolerance = SpectralParams{}.tolerance;
@@ -94,6 +96,12 @@ Status report_spectrum(const SpectrumOptions& o, const Graph& g, const Spectrum<
 Status run_spectrum(const SpectrumOptions& o) {
   if (o.domain != "q32" && o.domain != "fp64")
     return Status::input("--domain '" + o.domain + "' is not one of q32, fp64");
+  R1_ASSIGN(const ChosenBackend chosen, o.backend.make());
+  // The stage interface returns Q32 (R1-BKD-010), so fp64's unrounded vectors come only from the
+  // reference's fp64 solver: --domain fp64 is that solver, for the backends whose stage it is.
+  if (o.domain == "fp64" && chosen.name != "reference" && chosen.name != "fp64")
+    return Status::input("spectrum: --domain fp64 reports the reference's fp64 solver unrounded; backend '" + chosen.name +
+                         "' returns its spectrum in Q32: drop --domain fp64 or use --backend reference");
   ProgressLine progress;
   R1_ASSIGN(const ReadOptions ro, o.input.read_options(progress.sink()));
   const auto t0 = std::chrono::steady_clock::now();
@@ -118,7 +126,11 @@ Status run_spectrum(const SpectrumOptions& o) {
   }
   const auto t1 = std::chrono::steady_clock::now();
   if (o.domain == "q32") {
-    R1_ASSIGN(const auto s, spectral_embedding_q32(g, p, progress.sink(), so));
+    // The chosen backend's spectral stage (R1-BKD-016): the reference's is spectral_embedding_q32.
+    EpochOptions eo;
+    eo.spectral = p;
+    eo.parallel = o.parallel;
+    R1_ASSIGN(const auto s, chosen.backend->spectral(g, eo, progress.sink()));
     const double solve_s = seconds_since(t1);
     progress.finish();
     return report_spectrum(o, g, s, load_s, solve_s);
@@ -136,6 +148,7 @@ void add_spectrum(CLI::App& app, Runner& selected) {
   auto* cmd = app.add_subcommand("spectrum", "the spectral embedding alone: lambda_1..6, residuals, u_2..u_6");
   cmd->add_option("FILE", o->file, "snapshot: .graph, TSV/CSV edge list or Matrix Market (- for stdin)")->required();
   o->input.add_to(*cmd);
+  o->backend.add_to(*cmd);
   cmd->add_option("--domain", o->domain, "q32 (canonical, default) or fp64");
   cmd->add_option("--rho", o->rho, "regularisation rho >= 0 (default: 0 if connected, else the mean weighted degree)");
   cmd->add_option("--tolerance", o->tolerance, "residual target ||L u - lambda u|| (default 1e-9)");

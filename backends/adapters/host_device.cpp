@@ -1,25 +1,16 @@
 // The host device (R1-BKD-012..013): the 13.1 trait over host memory, with the reference's
-// Clifford primitives. Compute shaders, raster and presentation are not available on it.
-#include <bit>
-#include <cstring>
+// Clifford primitives. Compute shaders, raster and presentation are not available on it. The
+// tensor buffers are the format library's (r1/format/tensor.hpp).
+#include <algorithm>
 
 #include "r1/backends/device.hpp"
+#include "r1/format/bytes.hpp"
+#include "r1/format/tensor.hpp"
 #include "r1/reference/clifford.hpp"
 
 namespace r1::backends {
 
-static_assert(std::endian::native == std::endian::little, "tensor buffers copy doubles as little-endian bytes");
-
 namespace {
-
-void put_u32(std::vector<std::uint8_t>& b, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) b.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
-std::uint32_t get_u32(std::span<const std::uint8_t> b, std::size_t at) {
-  std::uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(b[at + i]) << (8 * i);
-  return v;
-}
 
 Status unsupported(const char* what) {
   return Status::input(std::string("host device: ") + what + " is not available (no GPU-like resources)");
@@ -90,7 +81,7 @@ class HostDevice final : public Device {
                            " bytes, expected " + std::to_string(total * 8) + " for d = " + std::to_string(d) +
                            " and " + std::to_string(s) + " shifts");
     std::vector<double> all(total);
-    std::memcpy(all.data(), g->data(), total * 8);
+    for (std::size_t i = 0; i < total; ++i) all[i] = format::load_f64(g->data() + i * 8);
     clifford::BlockParams p;
     std::size_t at = 0;
     auto take = [&](std::size_t k) {
@@ -131,27 +122,11 @@ class HostDevice final : public Device {
 }  // namespace
 
 std::vector<std::uint8_t> tensor_bytes(std::uint32_t n, std::uint32_t d, std::span<const double> values) {
-  std::vector<std::uint8_t> b;
-  b.reserve(8 + values.size() * 8);
-  put_u32(b, n);
-  put_u32(b, d);
-  const std::size_t at = b.size();
-  b.resize(at + values.size() * 8);
-  // The buffer is little-endian by definition; on a little-endian host a double's bytes are that.
-  std::memcpy(b.data() + at, values.data(), values.size() * 8);
-  return b;
+  return format::tensor_bytes(n, d, values);
 }
 
 Result<std::pair<std::array<std::uint32_t, 2>, std::vector<double>>> parse_tensor_bytes(std::span<const std::uint8_t> b) {
-  if (b.size() < 8) return Status::input("tensor buffer: byte 0: shorter than its 8-byte header");
-  const std::uint32_t n = get_u32(b, 0), d = get_u32(b, 4);
-  const std::uint64_t count = std::uint64_t{n} * d;
-  if (count > (b.size() - 8) / 8 || b.size() != 8 + count * 8)
-    return Status::input("tensor buffer: byte 0: " + std::to_string(n) + " x " + std::to_string(d) +
-                         " does not match its " + std::to_string(b.size()) + " bytes");
-  std::vector<double> v(count);
-  std::memcpy(v.data(), b.data() + 8, count * 8);
-  return std::pair{std::array<std::uint32_t, 2>{n, d}, std::move(v)};
+  return format::parse_tensor_bytes(b);
 }
 
 std::unique_ptr<Device> make_host_device() { return std::make_unique<HostDevice>(); }

@@ -4,7 +4,6 @@
 #include <algorithm>
 
 #include "adapters.hpp"
-#include "r1/reference/focus.hpp"
 
 namespace r1::backends {
 
@@ -28,10 +27,13 @@ class NullBackend final : public Backend {
   }
   Result<Focus<Q32>> focus(const Graph& g, const EpochOptions&, double, const ProgressFn&) override {
     ++calls_.focus;
-    // Uniform focus, apportioned so the raws still sum to exactly 2^32 (well-formed, R1-FOC-010).
+    // Uniform focus whose raws still sum to exactly 2^32 (well-formed, R1-FOC-010): the
+    // largest-remainder share of equal weights, floor(2^32 / n) each and one more raw for the
+    // first 2^32 mod n particles (equal remainders go to the lower index).
     Focus<Q32> f;
-    const std::vector<std::uint64_t> ones(g.n, 1);
-    for (std::int64_t r : apportion(std::uint64_t{1} << 32, ones)) f.phi.push_back(Q32::from_raw(r));
+    const std::uint64_t total = std::uint64_t{1} << 32;
+    for (std::uint64_t i = 0; i < g.n; ++i)
+      f.phi.push_back(Q32::from_raw(static_cast<std::int64_t>(total / g.n + (i < total % g.n ? 1 : 0))));
     for (std::uint32_t i = 0; i < g.n; ++i) f.cyberank.push_back(i);
     return f;
   }
@@ -108,7 +110,7 @@ class NullBackend final : public Backend {
     return h;
   }
   Result<render::Image> render(const Epoch&, const render::View& v, const render::RenderOptions&,
-                               render::FrameStats*) override {
+                               render::FrameStats*, const ProgressFn&) override {
     ++calls_.render;
     return render::Image(v.width, v.height);  // nothing drawn: the background alone
   }

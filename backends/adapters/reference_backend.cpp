@@ -1,10 +1,10 @@
-// The reference adapter (R1-BKD-020): every stage is the cpu-reference's own function.
+// The reference adapter (R1-BKD-020): every stage is the cpu-reference's own function
+// (r1::ReferenceStages and the reference renderer); it counts its calls (R1-BKD-004).
 #include <optional>
 
 #include "adapters.hpp"
-#include "r1/reference/encoding.hpp"
-#include "r1/reference/frame.hpp"
-#include "r1/reference/hierarchy.hpp"
+#include "r1/reference/epoch.hpp"
+#include "render/renderer.hpp"
 #include "render/scene.hpp"
 
 namespace r1::backends {
@@ -13,7 +13,7 @@ namespace {
 
 class ReferenceBackend final : public Backend {
  public:
-  ReferenceBackend(bool parallel, bool fp64) : parallel_(parallel), fp64_(fp64) {}
+  ReferenceBackend(bool parallel, bool fp64) : stages_(parallel, fp64), parallel_(parallel), fp64_(fp64) {}
 
   std::string_view name() const override { return fp64_ ? "fp64" : (parallel_ ? "parallel" : "reference"); }
   std::string_view summary() const override {
@@ -27,35 +27,29 @@ class ReferenceBackend final : public Backend {
 
   Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) override {
     ++calls_.spectral;
-    EpochOptions mine = o;
-    mine.parallel = parallel_;
-    if (fp64_) mine.domain = NumericDomain::kFp64;
-    return reference_spectral_stage(g, mine, p);
+    return stages_.spectral(g, o, p);
   }
   Result<Focus<Q32>> focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) override {
     ++calls_.focus;
-    EpochOptions mine = o;
-    mine.parallel = parallel_;
-    if (fp64_) mine.domain = NumericDomain::kFp64;
-    return reference_focus_stage(g, mine, lambda2, p);
+    return stages_.focus(g, o, lambda2, p);
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) override {
     ++calls_.frame;
-    return compute_frame(s, c, a, an);
+    return stages_.frame(s, c, a, an);
   }
   Result<Encoding> encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
                             const EncodingOptions& o, const ProgressFn& p) override {
     ++calls_.encoding;
-    return encode(s, g, f, c, o, nullptr, p);
+    return stages_.encoding(s, g, f, c, o, p);
   }
   Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
                               std::span<const Color> color, std::span<const ParticleId> ids,
                               const HierarchyOptions& o, const ProgressFn& p) override {
     ++calls_.hierarchy;
-    return build_hierarchy(pos, phi, color, ids, o, p);
+    return stages_.hierarchy(pos, phi, color, ids, o, p);
   }
   Result<render::Image> render(const Epoch& e, const render::View& v, const render::RenderOptions& o,
-                               render::FrameStats* stats) override {
+                               render::FrameStats* stats, const ProgressFn& progress) override {
     ++calls_.render;
     // The scene is built once per epoch and reused across views. It borrows the epoch's
     // hierarchy, so the key includes that storage's address besides the epoch's own and its
@@ -65,7 +59,7 @@ class ReferenceBackend final : public Backend {
       scene_ = render::make_scene(e);
       key_ = key;
     }
-    return render::render_frame(*scene_, v, o, stats);
+    return render::render_frame(*scene_, v, o, stats, progress);
   }
 
  private:
@@ -75,6 +69,7 @@ class ReferenceBackend final : public Backend {
     hemera::Digest digest{};
     bool operator==(const Key&) const = default;
   };
+  ReferenceStages stages_;
   bool parallel_, fp64_;
   std::optional<render::Scene> scene_;
   Key key_;

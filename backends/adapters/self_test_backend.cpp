@@ -78,9 +78,9 @@ class SelfTestBackend final : public Backend {
     return h;
   }
   Result<render::Image> render(const Epoch& e, const render::View& v, const render::RenderOptions& o,
-                               render::FrameStats* stats) override {
+                               render::FrameStats* stats, const ProgressFn& progress) override {
     ++calls_.render;
-    R1_ASSIGN(render::Image img, inner_->render(e, v, o, stats));
+    R1_ASSIGN(render::Image img, inner_->render(e, v, o, stats, progress));
     if (fault_ == SelfTestFault::kHue)
       for (std::size_t i = 0; i + 3 < img.rgba.size(); i += 4) rotate_hue(&img.rgba[i], 60.0);
     return img;

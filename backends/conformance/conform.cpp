@@ -15,6 +15,7 @@
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/spec/progress.hpp"
+#include "render/image.hpp"
 #include "render/scene.hpp"
 
 namespace r1::conformance {
@@ -246,7 +247,7 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
     render::RenderOptions ro;
     ro.timings = false;
     const auto t0 = std::chrono::steady_clock::now();
-    R1_TRY(cand.render(*e, v, ro, nullptr).status());
+    R1_TRY(cand.render(*e, v, ro, nullptr, {}).status());
     const double s = seconds_since(t0);
     const double budget = 1.0 / 120.0;  // 14-15.4: 120 FPS at 4K
     const bool million = e->ids.size() >= 1000000;
@@ -279,13 +280,13 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       const auto start = std::chrono::steady_clock::now();
       for (int k = 0; k < 100 && (k < 3 || seconds_since(start) < 1.0); ++k) {
         const auto t0 = std::chrono::steady_clock::now();
-        R1_ASSIGN(got, cand.render(e, v, ro, nullptr));
+        R1_ASSIGN(got, cand.render(e, v, ro, nullptr, {}));
         s = std::min(s, seconds_since(t0));
       }
       // A frame time only counts for a right frame (R1-CONF-063): the same epoch through the
       // reference's frame stage must agree within the pixel bound.
       render::FrameStats stats;
-      R1_ASSIGN(const render::Image want, tinf_reference->render(e, v, ro, &stats));
+      R1_ASSIGN(const render::Image want, tinf_reference->render(e, v, ro, &stats, {}));
       if (stats.tier_count[0] + stats.tier_count[1] + stats.tier_count[2] + stats.tier_count[3] > 0)
         return Status::internal("conform: the T-infinity view of " + std::to_string(e.ids.size()) +
                                 " particles is not pure: some particles are drawn at T0-T3");

@@ -1,14 +1,17 @@
-// Suite runs, comparisons and golden sets (R1-CONF-030..046).
+// Suite runs, comparisons and golden sets (R1-CONF-030..047).
 #include "r1/conformance/harness.hpp"
 
 #include <chrono>
 #include <cstdio>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/hierarchy.hpp"
+#include "r1/reference/epoch.hpp"
 #include "r1/reference/input_file.hpp"
+#include "render/image.hpp"
 
 namespace r1::conformance {
 
@@ -24,51 +27,61 @@ Result<std::string> read_all(const fs::path& p) {
 
 std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
 
-// Topology bytes back into the parts compare() reads: per level the clusters' parents and
-// children and every particle's cluster (R1-CONF-010).
-Result<Hierarchy> parse_topology(std::string_view b, const std::string& name) {
-  std::size_t at = 0;
-  auto u32 = [&](std::uint32_t& v) {
-    if (b.size() - at < 4) return false;
-    v = 0;
-    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(b[at + i])) << (8 * i);
-    at += 4;
-    return true;
-  };
-  const std::string tag = "r1topo1\n";
-  if (b.substr(0, tag.size()) != tag) return Status::input(name + ": byte 0: not r1 topology bytes");
-  at = tag.size();
-  auto truncated = [&] { return Status::input(name + ": byte " + std::to_string(at) + ": truncated topology"); };
-  std::uint32_t n = 0;
-  if (!u32(n)) return truncated();
-  Hierarchy h;
-  for (int l = 0; l < kLevels; ++l) {
-    std::uint32_t count = 0;
-    if (!u32(count)) return truncated();
-    // Each cluster needs at least 8 bytes: a count larger than the rest of the file is malformed.
-    if (count > (b.size() - at) / 8) return Status::input(name + ": byte " + std::to_string(at) + ": cluster count too large");
-    h.levels[l].resize(count);
-    for (std::uint32_t c = 0; c < count; ++c) {
-      ClusterNode& node = h.levels[l][c];
-      node.level = static_cast<std::uint32_t>(l);
-      node.id = c;
-      std::uint32_t k = 0;
-      if (!u32(node.parent) || !u32(k)) return truncated();
-      if (k > kMaxChildren) return Status::input(name + ": byte " + std::to_string(at) + ": more than 16 children");
-      node.children.resize(k);
-      for (auto& ch : node.children)
-        if (!u32(ch)) return truncated();
-    }
-    if (n > (b.size() - at) / 4) return truncated();
-    h.cluster_of[l].resize(n);
-    for (auto& c : h.cluster_of[l])
-      if (!u32(c)) return truncated();
+bool is_golden_dir(const fs::path& dir) { return manifest_format_is(dir, kGoldenFormat); }
+
+// The manifest keys of a snapshot graph's files (R1-CONF-043), with the part of LoadedSnapshot each names.
+struct FileKey {
+  const char* key;
+  const SuiteFile LoadedSnapshot::*file;
+};
+constexpr FileKey kFileKeys[] = {{"snapshot_file", &LoadedSnapshot::file},
+                                 {"titles_file", &LoadedSnapshot::titles},
+                                 {"crystal_file", &LoadedSnapshot::crystal}};
+
+// A golden set's copy of a snapshot graph's files (R1-CONF-043): the same relative paths under
+// the set, so its suite.toml finds them there.
+Status copy_files(const SuiteGraph& g, AtomicDirectory& out, std::set<std::string>& written, json& entry) {
+  if (!g.loaded) return Status::internal("suite graph " + g.name + ": its snapshot file was not loaded");
+  for (const FileKey& k : kFileKeys) {
+    const SuiteFile& f = (*g.loaded).*k.file;
+    if (f.path.empty()) continue;
+    entry[k.key] = {{"file", f.path}, {"digest", hex(hemera::hash(f.bytes))}};
+    if (!written.insert(f.path).second) continue;  // two entries may share a file
+    std::error_code ec;
+    fs::create_directories((out.temp_path() / f.path).parent_path(), ec);
+    if (ec) return Status::output((out.temp_path() / f.path).parent_path().string() + ": cannot create: " + ec.message());
+    R1_TRY(out.write(f.path, f.bytes));
   }
-  if (at != b.size()) return Status::input(name + ": byte " + std::to_string(at) + ": trailing bytes");
-  return h;
+  return Status::ok();
 }
 
-bool is_golden_dir(const fs::path& dir) { return manifest_format_is(dir, kGoldenFormat); }
+// Before anything is computed (R1-CONF-044): a snapshot graph's files under the set match the
+// manifest byte for byte (checked as read, before they are parsed)...
+Status check_file_bytes(const SuiteGraph& g, const LoadedSnapshot& files, const std::string& suite_source, const json& entry) {
+  const std::string at = g.where(suite_source);
+  for (const FileKey& k : kFileKeys) {
+    const SuiteFile& f = files.*k.file;
+    if (f.path.empty() != !entry.contains(k.key))
+      return Status::input(at + ": " + k.key + " of the manifest does not match suite.toml");
+    if (f.path.empty()) continue;
+    if (entry.at(k.key).at("file").get<std::string>() != f.path)
+      return Status::input(at + ": " + f.path + ": the manifest names another file");
+    if (hex(hemera::hash(f.bytes)) != entry.at(k.key).at("digest").get<std::string>())
+      return Status::input(at + ": " + f.path + ": digest does not match the manifest (the file was changed)");
+  }
+  return Status::ok();
+}
+
+// ...and the snapshot read from them has the recorded snapshot digest (R1-IN-040).
+Status check_snapshot_digest(const SuiteGraph& g, const std::string& suite_source, const json& entry) {
+  const std::string at = g.where(suite_source);
+  const std::string want = entry.at("snapshot_digest").get<std::string>();
+  const std::string got = hex(snapshot_digest(g.loaded->snapshot));
+  if (got != want)
+    return Status::input(at + ": " + g.file + ": snapshot digest " + got.substr(0, 16) + " does not match the manifest's " +
+                         want.substr(0, 16));
+  return Status::ok();
+}
 
 }  // namespace
 
@@ -85,7 +98,7 @@ Result<GraphRun> run_graph(backends::Backend& b, const Suite& suite, const Suite
   ro.timings = false;
   for (const SuiteView& sv : suite.views) {
     if (!draw) break;
-    R1_ASSIGN(render::Image img, b.render(run.epoch, sv.view, ro, nullptr));
+    R1_ASSIGN(render::Image img, b.render(run.epoch, sv.view, ro, nullptr, {}));
     if (img.width != sv.view.width || img.height != sv.view.height)
       return Status::internal(std::string(b.name()) + " rendered " + std::to_string(img.width) + "x" +
                               std::to_string(img.height) + " for a " + std::to_string(sv.view.width) + "x" +
@@ -158,15 +171,16 @@ bool reproduces(const GraphComparison& c) {
   return true;
 }
 
-Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const fs::path& dir) {
+Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const fs::path& dir, const std::string& backend) {
   AtomicDirectory out(dir, is_golden_dir);
   R1_TRY(out.open());
   json m;
   m["format"] = kGoldenFormat;
-  m["generator"] = "r1 golden (backend reference)";
+  m["generator"] = "r1 golden (backend " + backend + ")";
   m["suite"] = {{"name", suite.name}, {"file", "suite.toml"}, {"digest", hex(hemera::hash(suite.text))},
                 {"width", suite.width}, {"height", suite.height}};
   R1_TRY(out.write("suite.toml", suite.text));
+  std::set<std::string> copied;
   json graphs = json::array();
   for (std::size_t gi = 0; gi < runs.size(); ++gi) {
     const GraphRun& r = runs[gi];
@@ -175,12 +189,16 @@ Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const
     R1_TRY(out.write(r.name + ".topology.bin", topo));
     R1_TRY(out.write(r.name + ".positions.bin", pos));
     json g = {{"name", r.name},
-              {"gen", suite.graphs[gi].gen},
               {"particles", r.epoch.ids.size()},
               {"snapshot_digest", hex(r.epoch.snapshot_digest)},
               {"topology", {{"file", r.name + ".topology.bin"}, {"digest", hex(hemera::hash(topo))}}},
               {"hierarchy_digest", hex(hierarchy_digest(r.epoch.hierarchy))},
               {"positions", {{"file", r.name + ".positions.bin"}, {"digest", hex(hemera::hash(pos))}}}};
+    if (suite.graphs[gi].is_file()) {
+      R1_TRY(copy_files(suite.graphs[gi], out, copied, g));
+    } else {
+      g["gen"] = suite.graphs[gi].gen;
+    }
     json views = json::array();
     for (std::size_t v = 0; v < suite.views.size(); ++v) {
       const std::string base = r.name + "." + suite.views[v].name;
@@ -220,6 +238,15 @@ Result<GoldenSet> read_golden(const fs::path& dir) {
     const json& graphs = m.at("graphs");
     if (!graphs.is_array() || graphs.size() != set.suite.graphs.size())
       return Status::input(mpath + ": graphs do not match suite.toml");
+    for (std::size_t gi = 0; gi < graphs.size(); ++gi)
+      if (graphs[gi].at("name").get<std::string>() != set.suite.graphs[gi].name)
+        return Status::input(mpath + ": graph " + graphs[gi].at("name").get<std::string>() + " is not the suite's");
+    // Snapshot graphs: their copies under DIR, checked against the manifest (R1-CONF-044).
+    R1_TRY(load_suite_files(set.suite, dir, [&](std::size_t gi, const LoadedSnapshot& files) {
+      return check_file_bytes(set.suite.graphs[gi], files, set.suite.source, graphs[gi]);
+    }));
+    for (std::size_t gi = 0; gi < graphs.size(); ++gi)
+      if (set.suite.graphs[gi].is_file()) R1_TRY(check_snapshot_digest(set.suite.graphs[gi], set.suite.source, graphs[gi]));
     for (std::size_t gi = 0; gi < graphs.size(); ++gi) {
       const json& g = graphs[gi];
       Expected e;
@@ -229,7 +256,7 @@ Result<GoldenSet> read_golden(const fs::path& dir) {
       R1_ASSIGN(e.topology, read_all(dir / tfile));
       if (hex(hemera::hash(e.topology)) != g.at("topology").at("digest").get<std::string>())
         return Status::input((dir / tfile).string() + ": digest does not match the manifest");
-      R1_ASSIGN(e.hierarchy, parse_topology(e.topology, (dir / tfile).string()));
+      R1_ASSIGN(e.hierarchy, format::parse_topology_bytes(e.topology, (dir / tfile).string()));
       const std::string pfile = g.at("positions").at("file").get<std::string>();
       R1_ASSIGN(const std::string pos, read_all(dir / pfile));
       if (hex(hemera::hash(pos)) != g.at("positions").at("digest").get<std::string>())

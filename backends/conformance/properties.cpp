@@ -364,7 +364,7 @@ void check_nesting(const Epoch& got, const Epoch& want) {
 Result<std::vector<std::uint8_t>> display_bytes(backends::Backend& b, const Epoch& epoch, const render::View& view) {
   render::RenderOptions options;
   options.timings = false;
-  R1_ASSIGN(const render::Image image, b.render(epoch, view, options, nullptr));
+  R1_ASSIGN(const render::Image image, b.render(epoch, view, options, nullptr, {}));
   if (image.width != view.width || image.height != view.height ||
       image.rgba.size() != static_cast<std::size_t>(view.width) * static_cast<std::size_t>(view.height) * 4)
     return Status::internal("rendered a " + std::to_string(image.width) + "x" + std::to_string(image.height) +

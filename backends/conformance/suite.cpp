@@ -1,5 +1,6 @@
-// Suite files (R1-CONF-001..006): TOML with a name, an image size, [[graph]] entries of `r1 gen`
-// words and exactly 16 [[view]] entries (eye, target, fov; up is +z as in `r1 render`).
+// Suite files (R1-CONF-001..007): TOML with a name, an image size, [[graph]] entries of `r1 gen`
+// words or snapshot files, and exactly 16 [[view]] entries (eye, target, fov; up is +z as in
+// `r1 render`).
 #include "r1/conformance/suite.hpp"
 
 #include <charconv>
@@ -8,6 +9,7 @@
 #include <sstream>
 
 #include "r1/reference/graph_build.hpp"
+#include "r1/reference/snapshot_io.hpp"
 #include "snapshot/toml_subset.hpp"
 
 namespace r1::conformance {
@@ -49,6 +51,10 @@ Result<render::Vec3> vec3_of(const toml::node* node, const std::string& where) {
 }
 
 }  // namespace
+
+std::string SuiteGraph::where(const std::string& suite_source) const {
+  return suite_source + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": graph '" + name + "'";
+}
 
 Result<GenParams> parse_gen_words(std::string_view words, const std::string& where) {
   std::vector<std::string> w;
@@ -121,14 +127,35 @@ Result<Suite> parse_suite(std::string_view text, const std::string& name) {
     const std::string where = name + ": graph " + std::to_string(i + 1);
     if (!g) return Status::input(where + ": expected a table");
     SuiteGraph sg;
+    sg.line = static_cast<std::size_t>(g->source().begin.line);
     const auto gname = (*g)["name"].value<std::string>();
     if (!gname || !valid_name(*gname)) return Status::input(where + ": name: expected a name of a-z, 0-9, '-', '_'");
     if (!names.insert(*gname).second) return Status::input(where + ": name '" + *gname + "' is used twice");
     sg.name = *gname;
+    const std::string at = sg.where(name);
+    for (const char* key : {"gen", "file", "format", "titles", "crystal"})
+      if ((*g)[key].node() && !(*g)[key].is_string()) return Status::input(at + ": " + key + ": expected a string");
     const auto gen = (*g)["gen"].value<std::string>();
-    if (!gen) return Status::input(where + ": gen: expected the words of `r1 gen`");
-    sg.gen = *gen;
-    R1_ASSIGN(sg.params, parse_gen_words(sg.gen, where + ": gen"));
+    const auto file = (*g)["file"].value<std::string>();
+    if (gen.has_value() == file.has_value())
+      return Status::input(at + ": expected exactly one of gen (the words of `r1 gen`) and file (a snapshot file)");
+    if (gen) {
+      for (const char* key : {"format", "titles", "crystal"})
+        if ((*g)[key].node()) return Status::input(at + ": " + key + " is only for a file graph");
+      sg.gen = *gen;
+      R1_ASSIGN(sg.params, parse_gen_words(sg.gen, where + ": gen"));
+    } else {
+      // A snapshot file and its side files, as `r1 epoch FILE --format --titles --crystal` takes them.
+      sg.file = *file;
+      sg.format = (*g)["format"].value_or(std::string());
+      sg.titles = (*g)["titles"].value_or(std::string());
+      sg.crystal = (*g)["crystal"].value_or(std::string());
+      R1_TRY(check_suite_path(sg.file, at + ": file"));
+      if (!sg.titles.empty()) R1_TRY(check_suite_path(sg.titles, at + ": titles"));
+      if (!sg.crystal.empty()) R1_TRY(check_suite_path(sg.crystal, at + ": crystal"));
+      if (!sg.format.empty() && format_from_name(sg.format) == SnapshotFormat::kAuto)
+        return Status::input(at + ": format: '" + sg.format + "' is not one of graph, tsv, csv, mtx");
+    }
     sg.stresses = (*g)["stresses"].value_or(std::string());
     s.graphs.push_back(std::move(sg));
   }
@@ -160,6 +187,19 @@ Result<Suite> parse_suite(std::string_view text, const std::string& name) {
     R1_TRY(render::validate_view(sv.view, where));
     s.views.push_back(std::move(sv));
   }
+  // A golden set copies the files beside its own (R1-CONF-043): none may take one of their names.
+  std::set<std::string> own = {"suite.toml", "manifest.json"};
+  for (const SuiteGraph& g : s.graphs) {
+    own.insert(g.name + ".topology.bin");
+    own.insert(g.name + ".positions.bin");
+    for (const SuiteView& v : s.views) {
+      own.insert(g.name + "." + v.name + ".png");
+      own.insert(g.name + "." + v.name + ".exr");
+    }
+  }
+  for (const SuiteGraph& g : s.graphs)
+    for (const std::string* p : {&g.file, &g.titles, &g.crystal})
+      if (own.count(*p)) return Status::input(g.where(name) + ": '" + *p + "' is the name of a golden set's own file");
   return s;
 }
 
@@ -168,7 +208,9 @@ Result<Suite> read_suite(const std::string& path) {
   if (!f) return Status::input(path + ": cannot open the suite file");
   std::ostringstream ss;
   ss << f.rdbuf();
-  return parse_suite(ss.str(), path);
+  R1_ASSIGN(Suite s, parse_suite(ss.str(), path));
+  R1_TRY(load_suite_files(s, std::filesystem::path(path).parent_path()));
+  return s;
 }
 
 Result<Suite> default_suite() {
@@ -179,7 +221,12 @@ Result<Suite> default_suite() {
 
 Result<SuiteInput> make_input(const SuiteGraph& g) {
   SuiteInput in;
-  R1_ASSIGN(in.snapshot, generate(g.params));
+  if (g.is_file()) {
+    if (!g.loaded) return Status::internal("suite graph " + g.name + ": its snapshot file was not loaded");
+    in.snapshot = g.loaded->snapshot;
+  } else {
+    R1_ASSIGN(in.snapshot, generate(g.params));
+  }
   R1_ASSIGN(in.graph, build_graph(in.snapshot));
   return in;
 }

@@ -159,7 +159,7 @@ Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& grap
 
     std::vector<Q32> multiplier(n, Q32::one());
     if (overlay) {
-      R1_ASSIGN(const auto own, resolve_particles(snapshot, *overlay, options.custom_file.empty() ? "overlay" : options.custom_file));
+      R1_ASSIGN(const auto own, resolve_particles(snapshot, *overlay, options.custom_name.empty() ? "overlay" : options.custom_name));
       static const CrystalTag kNoTag{};
       for (std::size_t p = 0; p < n; ++p) {
         const CrystalTag& tag = snapshot.crystal.empty() ? kNoTag : snapshot.crystal[p];
@@ -186,9 +186,9 @@ Result<Encoding> encode(const Snapshot& snapshot, const Graph& graph, const Focu
   if (options.overlay == "crystal-v5")
     return encode_with_overlay(snapshot, graph, focus, spectrum, options, &crystal_v5_overlay(), info, progress);
   if (options.overlay == "custom") {
-    if (options.custom_file.empty()) return Status::input("overlay custom needs an overlay file");
-    R1_ASSIGN(const CustomOverlay custom, read_custom_overlay(options.custom_file));
-    return encode_with_overlay(snapshot, graph, focus, spectrum, options, &custom, info, progress);
+    // The overlay arrives as a value (R1-BKD-014): the caller read the file.
+    if (!options.custom) return Status::input("overlay custom needs an overlay file");
+    return encode_with_overlay(snapshot, graph, focus, spectrum, options, options.custom.get(), info, progress);
   }
   return Status::input("unknown overlay '" + options.overlay.substr(0, 80) + "' (none, crystal-v5, custom)");
 }

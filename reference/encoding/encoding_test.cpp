@@ -261,7 +261,7 @@ TEST(Encode, CustomOverlayResolvesNamesAndIds) {
   r1::test::write_file(dir / "o.toml", text);
   r1::EncodingOptions opt;
   opt.overlay = "custom";
-  opt.custom_file = (dir / "o.toml").string();
+  ASSERT_TRUE(r1::load_custom_overlay(opt, (dir / "o.toml").string()).is_ok());
   r1::EncodingInfo info;
   auto e = r1::encode(s, g, f, sp, opt, &info);
   ASSERT_TRUE(e.is_ok()) << e.status().message();
@@ -272,7 +272,7 @@ TEST(Encode, CustomOverlayResolvesNamesAndIds) {
   EXPECT_EQ(e->radius[4], r1::radius_of(f.phi[4], Q32::from_int(2)));
   // A name and an id reaching the same particle: the later line is named.
   r1::test::write_file(dir / "dup.toml", "[particle]\nn4 = { size = 2 }\n'" + r1::hemera::to_hex(s.particles[4]) + "' = { size = 3 }\n");
-  opt.custom_file = (dir / "dup.toml").string();
+  ASSERT_TRUE(r1::load_custom_overlay(opt, (dir / "dup.toml").string()).is_ok());
   auto dup = r1::encode(s, g, f, sp, opt);
   ASSERT_FALSE(dup.is_ok());
   EXPECT_EQ(dup.status().kind(), r1::ErrorKind::kInput);

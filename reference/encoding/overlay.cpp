@@ -1,6 +1,7 @@
 // Metadata overlays: the crystal-v5 preset and the custom TOML format, parse, canonical text, per-particle style (R1-ENC-030..043).
 #include <algorithm>
 #include <cctype>
+#include <memory>
 #include <string>
 
 #include "../snapshot/toml_subset.hpp"
@@ -276,6 +277,14 @@ Result<CustomOverlay> parse_custom_overlay(std::string_view text, const std::str
 Result<CustomOverlay> read_custom_overlay(const std::string& path) {
   R1_ASSIGN(auto file, InputFile::open(path));
   return parse_custom_overlay(file->text(), file->name());
+}
+
+Status load_custom_overlay(EncodingOptions& options, const std::string& path) {
+  if (path.empty()) return Status::ok();
+  R1_ASSIGN(CustomOverlay overlay, read_custom_overlay(path));
+  options.custom = std::make_shared<const CustomOverlay>(std::move(overlay));
+  options.custom_name = path;
+  return Status::ok();
 }
 
 std::string custom_overlay_text(const CustomOverlay& o) {

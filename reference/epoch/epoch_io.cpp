@@ -1,5 +1,5 @@
-// The epoch directory: canonical arrays, manifest, atomic write, validated read, TSV export
-// (R1-EPO-010..020).
+// The epoch directory: canonical arrays (the format library's codecs), manifest, atomic write,
+// validated read, TSV export (R1-EPO-010..020, R1-FMT-010).
 #include "r1/reference/epoch_io.hpp"
 
 #include <nlohmann/json.hpp>
@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "../snapshot/text_util.hpp"
+#include "r1/format/arrays.hpp"
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/hierarchy.hpp"
@@ -25,29 +26,8 @@ namespace {
 constexpr const char* kFormat = "r1-epoch";
 constexpr int kVersion = 2;  // 2: edges.bin; hierarchy.bin read back and checked
 
-void put_i64(std::string& out, std::int64_t v) {
-  for (int b = 0; b < 8; ++b) out.push_back(static_cast<char>(static_cast<std::uint64_t>(v) >> (8 * b)));
-}
-void put_u32(std::string& out, std::uint32_t v) {
-  for (int b = 0; b < 4; ++b) out.push_back(static_cast<char>(v >> (8 * b)));
-}
-std::int64_t get_i64(const char* p) {
-  std::uint64_t v = 0;
-  for (int b = 0; b < 8; ++b) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[b])) << (8 * b);
-  return static_cast<std::int64_t>(v);
-}
-std::uint32_t get_u32(const char* p) {
-  std::uint32_t v = 0;
-  for (int b = 0; b < 4; ++b) v |= static_cast<std::uint32_t>(static_cast<unsigned char>(p[b])) << (8 * b);
-  return v;
-}
-
-std::string q32_column(const std::vector<Q32>& v) {
-  std::string o;
-  o.reserve(v.size() * 8);
-  for (Q32 q : v) put_i64(o, q.raw);
-  return o;
-}
+using format::kEdgeBytes;
+using format::q32_column;
 
 std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
 
@@ -64,8 +44,6 @@ const char* role_name(Role r) {
   }
   return "none";
 }
-
-constexpr std::size_t kEdgeBytes = 24;  // u32 p, u32 q, i64 w, i64 a2
 
 const char* domain_name(NumericDomain d) { return d == NumericDomain::kQ32 ? "q32" : "fp64"; }
 
@@ -92,20 +70,8 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
     f.emplace_back("titles.tsv", std::move(t));
   }
   f.emplace_back("focus.q32", q32_column(e.focus.phi));
-  {
-    std::string s;
-    s.reserve(n * 5 * 8);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t k = 0; k < 5; ++k) put_i64(s, e.spectrum.u[k][i].raw);
-    f.emplace_back("spectral.q32", std::move(s));
-  }
-  {
-    std::string s;
-    s.reserve(n * 3 * 8);
-    for (const auto& p : e.frame.position)
-      for (Q32 c : p) put_i64(s, c.raw);
-    f.emplace_back("positions.q32", std::move(s));
-  }
+  f.emplace_back("spectral.q32", format::q32_rows(e.spectrum.u, n));
+  f.emplace_back("positions.q32", format::q32_triples(e.frame.position));
   f.emplace_back("radius.q32", q32_column(e.encoding.radius));
   f.emplace_back("luminosity.q32", q32_column(e.encoding.luminosity));
   f.emplace_back("hue.q32", q32_column(e.encoding.hue));
@@ -119,25 +85,9 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
     f.emplace_back("shape.u8", std::move(s));
     f.emplace_back("color.rgb8", std::move(c));
   }
-  {
-    std::string s;
-    s.reserve(n * kLevels * 4);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t l = 0; l < kLevels; ++l) put_u32(s, e.hierarchy.cluster_of[l][i]);
-    f.emplace_back("clusters.u32", std::move(s));
-  }
+  f.emplace_back("clusters.u32", format::u32_rows(e.hierarchy.cluster_of, n));
   f.emplace_back("hierarchy.bin", hierarchy_bytes(e.hierarchy));
-  {
-    std::string s;
-    s.reserve(e.edges.size() * kEdgeBytes);
-    for (const LayoutEdge& edge : e.edges) {
-      put_u32(s, edge.p);
-      put_u32(s, edge.q);
-      put_i64(s, edge.w_raw);
-      put_i64(s, edge.a2_raw);
-    }
-    f.emplace_back("edges.bin", std::move(s));
-  }
+  f.emplace_back("edges.bin", format::edge_rows(e.edges));
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
   for (std::size_t i = 0; i < anchor_count(n); ++i) anchor.entries.push_back({e.ids[i], e.frame.position[i]});
@@ -268,11 +218,7 @@ class EpochFiles {
   std::map<std::string, std::unique_ptr<InputFile>> data_;
 };
 
-std::vector<Q32> q32_rows(std::string_view b, std::size_t n, std::size_t stride, std::size_t k) {
-  std::vector<Q32> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = Q32::from_raw(get_i64(b.data() + (i * stride + k) * 8));
-  return v;
-}
+using format::read_q32_column;
 
 Status read_titles(const InputFile& f, const std::string& where, Epoch& e) {
   std::map<hemera::Digest, std::size_t> index;
@@ -304,9 +250,8 @@ Status read_edges(const EpochFiles& files, const fs::path& path, std::size_t n, 
                          " layout edges (expected " + std::to_string(count * kEdgeBytes) + ")");
   e.edges.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
-    const char* r = b.data() + k * kEdgeBytes;
     LayoutEdge& edge = e.edges[k];
-    edge = {get_u32(r), get_u32(r + 4), get_i64(r + 8), get_i64(r + 16)};
+    edge = format::edge_at(b, k);
     const bool ordered = k == 0 || std::pair(e.edges[k - 1].p, e.edges[k - 1].q) < std::pair(edge.p, edge.q);
     if (edge.p >= edge.q || edge.q >= n || !ordered || edge.w_raw <= 0 || edge.w_raw > Q32::kOneRaw ||
         edge.a2_raw < -edge.w_raw || edge.a2_raw > edge.w_raw)
@@ -344,21 +289,19 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   e.ids.resize(n);
   for (std::size_t i = 0; i < n; ++i) std::memcpy(e.ids[i].data(), ids.data() + i * 32, 32);
   R1_ASSIGN(const std::string_view focus, files.rows("focus.q32", 8));
-  e.focus.phi = q32_rows(focus, n, 1, 0);
+  e.focus.phi = read_q32_column(focus, n);
   R1_ASSIGN(const std::string_view spectral, files.rows("spectral.q32", 40));
-  for (std::size_t k = 0; k < 5; ++k) e.spectrum.u[k] = q32_rows(spectral, n, 5, k);
+  for (std::size_t k = 0; k < 5; ++k) e.spectrum.u[k] = read_q32_column(spectral, n, 5, k);
   R1_ASSIGN(const std::string_view pos, files.rows("positions.q32", 24));
-  e.frame.position.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t k = 0; k < 3; ++k) e.frame.position[i][k] = Q32::from_raw(get_i64(pos.data() + (i * 3 + k) * 8));
+  e.frame.position = format::read_q32_triples(pos, n);
   R1_ASSIGN(const std::string_view radius, files.rows("radius.q32", 8));
   R1_ASSIGN(const std::string_view lum, files.rows("luminosity.q32", 8));
   R1_ASSIGN(const std::string_view hue, files.rows("hue.q32", 8));
   R1_ASSIGN(const std::string_view sat, files.rows("saturation.q32", 8));
-  e.encoding.radius = q32_rows(radius, n, 1, 0);
-  e.encoding.luminosity = q32_rows(lum, n, 1, 0);
-  e.encoding.hue = q32_rows(hue, n, 1, 0);
-  e.encoding.saturation = q32_rows(sat, n, 1, 0);
+  e.encoding.radius = read_q32_column(radius, n);
+  e.encoding.luminosity = read_q32_column(lum, n);
+  e.encoding.hue = read_q32_column(hue, n);
+  e.encoding.saturation = read_q32_column(sat, n);
   R1_ASSIGN(const std::string_view role, files.rows("role.u8", 1));
   R1_ASSIGN(const std::string_view shape, files.rows("shape.u8", 1));
   R1_ASSIGN(const std::string_view color, files.rows("color.rgb8", 3));
@@ -374,10 +317,7 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
     std::memcpy(e.encoding.color[i].data(), color.data() + 3 * i, 3);
   }
   R1_ASSIGN(const std::string_view clusters, files.rows("clusters.u32", 4 * kLevels));
-  for (std::size_t l = 0; l < kLevels; ++l) {
-    e.hierarchy.cluster_of[l].resize(n);
-    for (std::size_t i = 0; i < n; ++i) e.hierarchy.cluster_of[l][i] = get_u32(clusters.data() + (i * kLevels + l) * 4);
-  }
+  for (std::size_t l = 0; l < kLevels; ++l) e.hierarchy.cluster_of[l] = format::read_u32_column(clusters, n, kLevels, l);
   e.titles.assign(n, {});
   if (const InputFile* t = files.find("titles.tsv")) R1_TRY(read_titles(*t, (dir / "titles.tsv").string(), e));
   R1_TRY(read_edges(files, dir / "edges.bin", n, m.at("snapshot").at("layout_edges").get<std::size_t>(), e));

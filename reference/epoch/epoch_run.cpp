@@ -1,8 +1,10 @@
-// The epoch pipeline: stages in order, domains, timings (R1-EPO-001..004).
+// The epoch pipeline and the reference's stages: stages in order, domains, timings (R1-EPO-001..004,
+// R1-BKD-011).
 #include "r1/reference/epoch.hpp"
 
 #include <chrono>
 #include <cmath>
+#include <string_view>
 
 #include "r1/reference/focus.hpp"
 #include "r1/reference/frame.hpp"
@@ -15,9 +17,9 @@ namespace {
 class Stopwatch {
  public:
   explicit Stopwatch(std::vector<StageTiming>& out) : out_(out), t_(std::chrono::steady_clock::now()) {}
-  void lap(const char* stage) {
+  void lap(std::string_view stage) {
     const auto now = std::chrono::steady_clock::now();
-    out_.push_back({stage, std::chrono::duration<double>(now - t_).count()});
+    out_.push_back({std::string(stage), std::chrono::duration<double>(now - t_).count()});
     t_ = now;
   }
 
@@ -73,10 +75,45 @@ Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions&
   return q;
 }
 
-Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const ProgressFn& progress,
-                        const EpochStages* stages) {
-  const EpochStages none;
-  const EpochStages& st = stages ? *stages : none;
+EpochOptions ReferenceStages::adjusted(const EpochOptions& o) const {
+  EpochOptions mine = o;
+  mine.parallel = o.parallel || parallel_;
+  if (fp64_) mine.domain = NumericDomain::kFp64;
+  return mine;
+}
+
+Result<Spectrum<Q32>> ReferenceStages::spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) {
+  if (!parallel_ && !fp64_) return reference_spectral_stage(g, o, p);
+  return reference_spectral_stage(g, adjusted(o), p);
+}
+
+Result<Focus<Q32>> ReferenceStages::focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) {
+  if (!parallel_ && !fp64_) return reference_focus_stage(g, o, lambda2, p);
+  return reference_focus_stage(g, adjusted(o), lambda2, p);
+}
+
+Result<Frame> ReferenceStages::frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& name) {
+  return compute_frame(s, c, a, name);
+}
+
+Result<Encoding> ReferenceStages::encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
+                                           const EncodingOptions& o, const ProgressFn& p) {
+  return encode(s, g, f, c, o, nullptr, p);
+}
+
+Result<Hierarchy> ReferenceStages::hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
+                                             std::span<const Color> color, std::span<const ParticleId> ids,
+                                             const HierarchyOptions& o, const ProgressFn& p) {
+  return build_hierarchy(pos, phi, color, ids, o, p);
+}
+
+Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const ProgressFn& progress) {
+  ReferenceStages reference;
+  return run_epoch(snapshot, graph, o, reference, progress);
+}
+
+Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, EpochStages& st,
+                        const ProgressFn& progress) {
   Epoch e;
   Stopwatch clock(e.timings);
   e.domain = o.domain;
@@ -102,49 +139,25 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   e.trikernel = o.trikernel;
   e.spectral_params = o.spectral;
 
-  if (st.spectral) {
-    R1_ASSIGN(e.spectrum, st.spectral(graph, o, progress));
-  } else {
-    R1_ASSIGN(e.spectrum, reference_spectral_stage(graph, o, progress));
-  }
-  clock.lap("spectral");
+  R1_ASSIGN(e.spectrum, st.spectral(graph, o, progress));
+  clock.lap(stage_name(Stage::kSpectral));
 
   // R1-EPO-002: lambda_2 for T(eps); 0 for a disconnected graph.
   const double lambda2 = e.components == 1 && e.spectrum.found >= 1 ? e.spectrum.eigenvalues[1] : 0.0;
-  if (st.focus) {
-    R1_ASSIGN(e.focus, st.focus(graph, o, lambda2, progress));
-  } else {
-    R1_ASSIGN(e.focus, reference_focus_stage(graph, o, lambda2, progress));
-  }
-  clock.lap("focus");
+  R1_ASSIGN(e.focus, st.focus(graph, o, lambda2, progress));
+  clock.lap(stage_name(Stage::kFocus));
 
   apply_sign_convention(e.spectrum);
-  std::optional<Anchor> anchor;
-  if (!o.anchor_path.empty()) {
-    R1_ASSIGN(Anchor a, read_anchor(o.anchor_path));
-    anchor = std::move(a);
-  }
-  const Anchor* anchor_ptr = anchor ? &*anchor : nullptr;
-  if (st.frame) {
-    R1_ASSIGN(e.frame, st.frame(snapshot, e.spectrum, anchor_ptr, o.anchor_path));
-  } else {
-    R1_ASSIGN(e.frame, compute_frame(snapshot, e.spectrum, anchor_ptr, o.anchor_path));
-  }
-  clock.lap("frame");
+  // The anchor arrives as a value (R1-BKD-014); the caller read the file.
+  const Anchor* anchor = o.anchor ? &*o.anchor : nullptr;
+  R1_ASSIGN(e.frame, st.frame(snapshot, e.spectrum, anchor, anchor ? o.anchor_name : std::string()));
+  clock.lap(stage_name(Stage::kFrame));
 
-  if (st.encoding) {
-    R1_ASSIGN(e.encoding, st.encoding(snapshot, graph, e.focus, e.spectrum, o.encoding, progress));
-  } else {
-    R1_ASSIGN(e.encoding, encode(snapshot, graph, e.focus, e.spectrum, o.encoding, nullptr, progress));
-  }
-  clock.lap("encoding");
+  R1_ASSIGN(e.encoding, st.encoding(snapshot, graph, e.focus, e.spectrum, o.encoding, progress));
+  clock.lap(stage_name(Stage::kEncoding));
 
-  if (st.hierarchy) {
-    R1_ASSIGN(e.hierarchy, st.hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
-  } else {
-    R1_ASSIGN(e.hierarchy, build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
-  }
-  clock.lap("hierarchy");
+  R1_ASSIGN(e.hierarchy, st.hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
+  clock.lap(stage_name(Stage::kHierarchy));
   // A stage from elsewhere must hand back data of the epoch's shape (R1-BKD-011).
   const std::size_t n = e.ids.size();
   if (e.focus.phi.size() != n || e.frame.position.size() != n || e.encoding.color.size() != n ||

@@ -149,7 +149,7 @@ TEST(EpochRun, AligningToItsOwnAnchorChangesNothing) {
   const auto g0 = epoch(s);
   ASSERT_TRUE(r1::write_epoch(g0, d / "g0").is_ok());
   r1::EpochOptions o;
-  o.anchor_path = (d / "g0" / "anchor.bin").string();
+  ASSERT_TRUE(r1::load_anchor(o, (d / "g0" / "anchor.bin").string()).is_ok());
   const auto g1 = epoch(s, o);
   EXPECT_FALSE(g1.frame.alignment.genesis);
   EXPECT_EQ(g1.frame.alignment.matched, r1::anchor_count(s.particles.size()));
@@ -198,7 +198,7 @@ TEST(EpochRun, GainingLinksAwayFromTheAnchorKeepsTheLayout) {
     ++added;
   }
   r1::EpochOptions o;
-  o.anchor_path = (d / "e0" / "anchor.bin").string();
+  ASSERT_TRUE(r1::load_anchor(o, (d / "e0" / "anchor.bin").string()).is_ok());
   const auto e1 = epoch(s1, o);
   EXPECT_NE(r1::snapshot_digest(s1), r1::snapshot_digest(s0));
   EXPECT_FALSE(e1.frame.alignment.genesis);

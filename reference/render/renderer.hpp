@@ -15,26 +15,9 @@
 #include "scene.hpp"
 #include "view.hpp"
 #include "r1/spec/progress.hpp"
+#include "r1/spec/render_options.hpp"
 
 namespace r1::render {
-
-struct FrameStats {
-  std::array<std::uint64_t, 5> tier_count{};  // visible particles per tier (T0..T-inf)
-  std::uint64_t visible = 0, culled_nodes = 0, nodes_tested = 0;
-  std::uint64_t edges_in_view = 0;     // layout edges with both endpoints visible
-  std::uint64_t edges_considered = 0;  // layout edges with an endpoint at T2 or above
-  std::uint64_t edges_drawn = 0;       // tube instances after bundling
-  std::uint64_t splats = 0, labels = 0;
-  std::uint64_t field_walked = 0, field_candidates = 0, field_samples = 0, field_evaluations = 0;
-  // Seconds per stage.
-  double cull_s = 0, impostor_s = 0, edge_s = 0, splat_s = 0, field_s = 0, label_s = 0, total_s = 0;
-};
-
-// Options that do not belong in a view file.
-struct RenderOptions {
-  FieldParams field;
-  bool timings = true;
-};
 
 // Renders `view` of the scene into linear premultiplied RGBA (+ the field's flow channels).
 Result<Image> render_frame(const Scene& scene, const View& view, const RenderOptions& options, FrameStats* stats,

@@ -7,7 +7,7 @@
 #include <optional>
 
 #include "r1/spec/epoch.hpp"
-#include "vec3.hpp"
+#include "r1/spec/vec3.hpp"
 
 namespace r1::render {
 

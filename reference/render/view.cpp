@@ -30,12 +30,6 @@ std::string decimal(double v) {
 
 }  // namespace
 
-Vec3 Quat::rotate(const Vec3& v) const {
-  const Vec3 q{x, y, z};
-  const Vec3 t = cross(q, v) * 2.0;
-  return v + t * w + cross(q, t);
-}
-
 CameraFrame camera_frame(const View& v) {
   CameraFrame f;
   f.right = v.camera.orientation.rotate({1, 0, 0});

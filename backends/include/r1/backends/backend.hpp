@@ -1,19 +1,19 @@
-// The backend interface (R-1.0 section 13; spec/backends.md R1-BKD-001..030): the stage-level
+// The backend interface (R-1.0 section 13; spec/backends.md R1-BKD-001..030, R1-BKD-014): the stage-level
 // API every backend implements and the conformance harness drives, plus the section 13.1 trait
 // for backends with GPU-like resources.
 #pragma once
 
 #include <cstdint>
 #include <memory>
-#include <span>
-#include <string>
 #include <string_view>
-#include <vector>
 
-#include "r1/reference/epoch.hpp"
 #include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
+#include "r1/spec/graph.hpp"
+#include "r1/spec/progress.hpp"
+#include "r1/spec/snapshot.hpp"
+#include "r1/spec/stages.hpp"
 #include "r1/spec/status.hpp"
-#include "render/renderer.hpp"
 
 namespace r1::backends {
 
@@ -30,13 +30,12 @@ struct StageCalls {
   std::uint64_t total() const { return spectral + focus + frame + encoding + hierarchy + render; }
 };
 
-// The stage-level interface (R1-BKD-010). Every stage is a pure function of its arguments; the
-// arguments and results are those of the reference stages (r1/reference/epoch.hpp EpochStages,
-// r1::render::render_frame). Errors are values; no exception crosses this interface (R1-ERR-004).
-class Backend {
+// The stage-level interface (R1-BKD-010): the stage list of r1/spec/stages.hpp, written once,
+// plus what names and describes a backend. Every stage is a pure function of its arguments; the
+// arguments and results are spec/ values (R1-BKD-014). Errors are values; no exception crosses
+// this interface (R1-ERR-004).
+class Backend : public EpochStages, public FrameStage {
  public:
-  virtual ~Backend() = default;
-
   // The registry name ("reference", "null", ...).
   virtual std::string_view name() const = 0;
   // 13.1: the backend promises a fixed reduce order, no FMA contraction, fixed dispatch.
@@ -44,24 +43,6 @@ class Backend {
   virtual Domain numeric_domain() const = 0;
   // One line on what this backend is, for `r1 backends` and reports.
   virtual std::string_view summary() const = 0;
-
-  // ---- epoch stages (R-1.0 3, 4, 5, 10) --------------------------------------------------
-  virtual Result<Spectrum<Q32>> spectral(const Graph& graph, const EpochOptions& options, const ProgressFn& progress) = 0;
-  virtual Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
-                                   const ProgressFn& progress) = 0;
-  virtual Result<Frame> frame(const Snapshot& snapshot, const Spectrum<Q32>& conventioned, const Anchor* anchor,
-                              const std::string& anchor_name) = 0;
-  virtual Result<Encoding> encoding(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus,
-                                    const Spectrum<Q32>& conventioned, const EncodingOptions& options,
-                                    const ProgressFn& progress) = 0;
-  virtual Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
-                                      std::span<const Color> color, std::span<const ParticleId> ids,
-                                      const HierarchyOptions& options, const ProgressFn& progress) = 0;
-
-  // ---- frame stage (R-1.0 6-9) -----------------------------------------------------------
-  // Renders `view` of `epoch` into linear premultiplied RGBA (r1::render::Image).
-  virtual Result<render::Image> render(const Epoch& epoch, const render::View& view,
-                                       const render::RenderOptions& options, render::FrameStats* stats) = 0;
 
   // The 13.1 trait, for a backend with GPU-like resources; nullptr when it has none.
   virtual Device* device() { return nullptr; }
@@ -73,7 +54,7 @@ class Backend {
 };
 
 // The epoch through `backend`'s stages, in the reference's order (R1-BKD-011): the one pipeline
-// r1::run_epoch runs, with every stage replaced.
+// r1::run_epoch runs, with every stage the backend's (backends/pipeline.cpp).
 Result<Epoch> run_epoch(Backend& backend, const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
                         const ProgressFn& progress = {});
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/golden.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/status.hpp"
 
@@ -17,12 +18,13 @@ namespace r1::conformance {
 inline constexpr double kPositionBound = 1e-3;
 inline constexpr double kPixelBound = 2.0;
 
-// The topology of R-1.0 12.1 as canonical bytes (R1-CONF-010): per level, the cluster count, then
-// per cluster in id order its parent and children, then every particle's cluster id. Positions
-// (AABBs), focus sums and colours are left out: they are held by P_RENDER_POS, not by the strict
-// topology check, and may differ within their bounds.
-std::string topology_bytes(const Hierarchy& h);
-hemera::Digest topology_digest(const Hierarchy& h);
+// The topology of R-1.0 12.1 as canonical bytes (R1-CONF-010) and positions as bytes
+// (R1-CONF-021): the format library's codecs (r1/format/golden.hpp). AABBs, focus sums and colours
+// are left out of the topology: they are held by P_RENDER_POS, not by the strict topology check.
+using format::parse_position_bytes;
+using format::position_bytes;
+using format::topology_bytes;
+using format::topology_digest;
 
 // The first difference between two topologies, in words ("level 0: particle 17 is in cluster 3,
 // expected 4"); empty when they are the same.
@@ -37,8 +39,5 @@ struct PositionDeviation {
 Result<PositionDeviation> position_deviation(const std::vector<std::array<Q32, 3>>& got,
                                              const std::vector<std::array<Q32, 3>>& want);
 
-// Positions as canonical bytes: n, then x, y, z raws per particle, little-endian (R1-CONF-021).
-std::string position_bytes(const std::vector<std::array<Q32, 3>>& pos);
-Result<std::vector<std::array<Q32, 3>>> parse_position_bytes(std::string_view bytes, const std::string& name);
 
 }  // namespace r1::conformance

@@ -50,21 +50,25 @@ struct GraphComparison {
 };
 Result<GraphComparison> compare(const GraphRun& got, const Expected& want);
 
-// ---- golden sets (R1-CONF-040..046) ---------------------------------------------------------
+// ---- golden sets (R1-CONF-040..047) ---------------------------------------------------------
 
 inline constexpr const char* kGoldenFormat = "r1-golden-1";
 
 // Runs the suite with the reference backend and writes DIR atomically: suite.toml, manifest.json,
-// and per graph NAME.topology.bin, NAME.positions.bin, NAME.VIEW.png and NAME.VIEW.exr.
+// and per graph NAME.topology.bin, NAME.positions.bin, NAME.VIEW.png and NAME.VIEW.exr; a file
+// graph's files are copied to the paths the suite names (R1-CONF-043).
 // `runs` receives the reference runs (for a change report against an earlier set).
-Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const std::filesystem::path& dir);
+// `backend` names the backend that made the runs in the manifest's generator line.
+Status write_golden(const Suite& suite, const std::vector<GraphRun>& runs, const std::filesystem::path& dir,
+                    const std::string& backend = "reference");
 
 struct GoldenSet {
   Suite suite;
   std::vector<Expected> graphs;  // in suite order
 };
 // Reads DIR: its suite.toml, the manifest's digests checked against the files, topology, positions
-// and PNG images. An input error names the file at fault.
+// and PNG images; a file graph's copies checked by bytes and snapshot digest (R1-CONF-044). An
+// input error names the file at fault.
 Result<GoldenSet> read_golden(const std::filesystem::path& dir);
 
 // One line per graph saying what differs between `got` and `want` ("same" when nothing does), for

@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
 #include "r1/spec/graph.hpp"
+#include "r1/spec/overlay.hpp"
 #include "r1/spec/progress.hpp"
 #include "r1/spec/snapshot.hpp"
 #include "r1/spec/status.hpp"
@@ -41,15 +43,6 @@ Q32 hue_of(Q32 u5, Q32 u6);
 std::vector<Q32> saturation_from_a2(const Graph& g);
 
 // ---- betweenness and roles (R1-ENC-010..019) -------------------------------------------------
-
-struct BetweennessOptions {
-  // Exact when n (n + nnz) <= budget; otherwise k = max(min_pivots, budget / (n + nnz)) pivots
-  // (R1-ENC-014).
-  std::uint64_t budget = std::uint64_t{1} << 30;
-  std::uint32_t min_pivots = 32;
-  // When set, exactly this many pivots (0 = every particle as a source, the exact computation).
-  std::optional<std::uint32_t> pivots;
-};
 
 struct Betweenness {
   std::vector<double> value;  // b(p) of R1-ENC-012, exact or estimated
@@ -82,52 +75,20 @@ bool is_hub(std::uint64_t degree, std::uint64_t n, u128 s1, u128 s2);
 
 // ---- overlays (R1-ENC-030..043) ----------------------------------------------------------------
 
-// What an overlay sets for one particle; unset fields keep the schemaless value.
-struct OverlayStyle {
-  std::optional<Shape> shape;
-  std::optional<Rgb8> color;
-  std::optional<Q32> size;  // radius multiplier in (0, 16]
-  friend bool operator==(const OverlayStyle&, const OverlayStyle&) = default;
-};
-
-struct OverlayParticle {
-  std::string key;          // a particle name or 64 hex digits
-  OverlayStyle style;
-  std::size_t line = 0;     // where it was given, for messages (0: built in code)
-  friend bool operator==(const OverlayParticle& a, const OverlayParticle& b) { return a.key == b.key && a.style == b.style; }
-};
-
-// A metadata overlay: crystal-keyed tables plus per-particle entries (R1-ENC-040).
-struct CustomOverlay {
-  std::array<std::optional<Shape>, kCrystalTypes.size()> type_shape;
-  std::array<std::optional<Rgb8>, kCrystalDomains.size()> domain_color;
-  std::array<std::optional<Q32>, kCrystalSizes.size()> size_multiplier;
-  std::vector<OverlayParticle> particles;  // in key order, keys distinct
-  friend bool operator==(const CustomOverlay&, const CustomOverlay&) = default;
-};
-
-inline constexpr std::array<std::string_view, 6> kShapeNames = {"sphere", "torus", "tetrahedron", "cube", "octahedron", "cylinder"};
-// The largest size multiplier an overlay may give (R1-ENC-040).
-inline constexpr std::int64_t kMaxSizeMultiplier = 16;
-
 // The crystal-v5 preset as tables (R1-ENC-031).
 const CustomOverlay& crystal_v5_overlay();
 // Parses the custom TOML format; errors are "NAME:LINE: reason" (R1-ENC-042).
 Result<CustomOverlay> parse_custom_overlay(std::string_view text, const std::string& name);
 Result<CustomOverlay> read_custom_overlay(const std::string& path);
+// Reads the overlay file at `path` into options.custom and names it options.custom_name: the
+// stage receives the overlay as a value (R1-BKD-014). An empty path leaves the options unchanged.
+Status load_custom_overlay(EncodingOptions& options, const std::string& path);
 // Canonical TOML text of an overlay (R1-ENC-043): parse_custom_overlay gives it back.
 std::string custom_overlay_text(const CustomOverlay& overlay);
 // The style of one particle: tables through its crystal metadata, then its own entry.
 OverlayStyle overlay_style(const CustomOverlay& overlay, const CrystalTag& tag, const OverlayStyle* own = nullptr);
 
 // ---- the encoding stage ------------------------------------------------------------------------
-
-struct EncodingOptions {
-  std::string overlay = "none";   // none | crystal-v5 | custom
-  std::string custom_file;        // the TOML file for overlay = custom
-  bool role_shapes = true;        // shapes from roles (R1-ENC-019)
-  BetweennessOptions betweenness; // exact size limit and pivots (R1-ENC-014)
-};
 
 // What the manifest reports beside the Encoding.
 struct EncodingInfo {
@@ -142,7 +103,7 @@ Result<Encoding> encode(const Snapshot& snapshot, const Graph& graph, const Focu
                         const Spectrum<Q32>& conventioned, const EncodingOptions& options = {},
                         EncodingInfo* info = nullptr, const ProgressFn& progress = {});
 // The same with the overlay given as tables (nullptr: none); options.overlay only labels
-// Encoding::overlay and options.custom_file names the overlay in messages.
+// Encoding::overlay and options.custom_name names the overlay in messages.
 Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus,
                                      const Spectrum<Q32>& conventioned, const EncodingOptions& options,
                                      const CustomOverlay* overlay, EncodingInfo* info = nullptr,

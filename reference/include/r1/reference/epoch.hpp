@@ -1,57 +1,59 @@
-// The epoch pipeline (R1-EPO-001..004): snapshot -> graph -> spectrum -> focus -> frame ->
-// encoding -> hierarchy, in the canonical Q32 domain or fp64.
+// The epoch pipeline (R1-EPO-001..004, R1-BKD-011): snapshot -> graph -> spectrum -> focus ->
+// frame -> encoding -> hierarchy, in the canonical Q32 domain or fp64, over any implementation of
+// the stage list (r1/spec/stages.hpp); the reference's own stages are ReferenceStages.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "r1/reference/encoding.hpp"
 #include "r1/reference/hierarchy.hpp"
 #include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
 #include "r1/spec/graph.hpp"
 #include "r1/spec/progress.hpp"
 #include "r1/spec/snapshot.hpp"
+#include "r1/spec/stages.hpp"
 #include "r1/spec/status.hpp"
 
 namespace r1 {
 
-struct EpochOptions {
-  NumericDomain domain = NumericDomain::kQ32;
-  TriKernelParams trikernel;
-  SpectralParams spectral;
-  std::string anchor_path;  // empty: genesis epoch
-  EncodingOptions encoding;
-  HierarchyOptions hierarchy;
-  bool parallel = false;    // TBB row loops in spectral and focus: bit-identical results (R1-SPEC-071, R1-FOC-090)
+// The cpu-reference's epoch stages. `parallel` turns on the TBB row loops of the spectral and
+// focus stages whatever options.parallel says (the same bits, R1-SPEC-071, R1-FOC-090); `fp64`
+// runs those two stages in IEEE doubles whatever options.domain says (R1-EPO-003).
+class ReferenceStages final : public EpochStages {
+ public:
+  explicit ReferenceStages(bool parallel = false, bool fp64 = false) : parallel_(parallel), fp64_(fp64) {}
+
+  Result<Spectrum<Q32>> spectral(const Graph& graph, const EpochOptions& options, const ProgressFn& progress) override;
+  Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
+                           const ProgressFn& progress) override;
+  Result<Frame> frame(const Snapshot& snapshot, const Spectrum<Q32>& conventioned, const Anchor* anchor,
+                      const std::string& anchor_name) override;
+  Result<Encoding> encoding(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus,
+                            const Spectrum<Q32>& conventioned, const EncodingOptions& options,
+                            const ProgressFn& progress) override;
+  Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
+                              std::span<const Color> color, std::span<const ParticleId> ids,
+                              const HierarchyOptions& options, const ProgressFn& progress) override;
+
+ private:
+  EpochOptions adjusted(const EpochOptions& options) const;
+  bool parallel_, fp64_;
 };
 
-struct Anchor;
-
-// The five computing stages of an epoch, as replaceable functions: a backend (backends/) runs the
-// same pipeline with its own stage implementations through them (R1-BKD-010). An empty function
-// is the reference stage. Each receives exactly what the reference stage receives.
-struct EpochStages {
-  // The spectrum in the domain of `options.domain`, as Q32 (fp64 rounded entry by entry), before
-  // the sign convention.
-  std::function<Result<Spectrum<Q32>>(const Graph&, const EpochOptions&, const ProgressFn&)> spectral;
-  // phi* in Q32 (an fp64 focus projected onto the Q32 simplex, R1-EPO-004).
-  std::function<Result<Focus<Q32>>(const Graph&, const EpochOptions&, double lambda2, const ProgressFn&)> focus;
-  std::function<Result<Frame>(const Snapshot&, const Spectrum<Q32>& conventioned, const Anchor*,
-                              const std::string& anchor_name)> frame;
-  std::function<Result<Encoding>(const Snapshot&, const Graph&, const Focus<Q32>&, const Spectrum<Q32>& conventioned,
-                                 const EncodingOptions&, const ProgressFn&)> encoding;
-  std::function<Result<Hierarchy>(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
-                                  std::span<const Color> color, std::span<const ParticleId> ids,
-                                  const HierarchyOptions&, const ProgressFn&)> hierarchy;
-};
-
-// Runs every stage on a snapshot and its layout graph; `timings` are filled per stage. `stages`
-// replaces stages (nullptr or an empty member: the reference's).
+// Runs every stage of `stages` on a snapshot and its layout graph, in the one order of R1-EPO-001;
+// `timings` are filled per stage. The digest, the layout edges and the sign convention are the
+// pipeline's own (R1-BKD-011). A stage that returns data for the wrong number of particles is an
+// internal error.
+Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& options, EpochStages& stages,
+                        const ProgressFn& progress = {});
+// The same with the reference's stages.
 Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
-                        const ProgressFn& progress = {}, const EpochStages* stages = nullptr);
+                        const ProgressFn& progress = {});
 
-// The reference stages alone, as run_epoch calls them.
+// The reference stages alone, as ReferenceStages calls them (options.domain and options.parallel
+// decide).
 Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& options, const ProgressFn& progress);
 Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& options, double lambda2,
                                          const ProgressFn& progress);

@@ -10,7 +10,10 @@
 #include <vector>
 
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/anchor.hpp"
+#include "r1/spec/anchor.hpp"
 #include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
 #include "r1/spec/snapshot.hpp"
 #include "r1/spec/status.hpp"
 
@@ -34,35 +37,17 @@ std::int64_t sign_pivot(std::span<const double> u);
 Result<Frame> genesis_frame(const Spectrum<Q32>& conventioned, std::uint32_t n);
 
 // ---- anchor file (R1-FRM-020..023) ------------------------------------------------------------
-
-struct AnchorEntry {
-  ParticleId id{};
-  std::array<Q32, 3> position{};
-  friend bool operator==(const AnchorEntry&, const AnchorEntry&) = default;
-};
-
-struct Anchor {
-  std::vector<AnchorEntry> entries;  // 1..1024, distinct ids
-  friend bool operator==(const Anchor&, const Anchor&) = default;
-};
-
-inline constexpr std::size_t kAnchorHeaderBytes = 16;
-inline constexpr std::size_t kAnchorEntryBytes = 56;
-inline constexpr std::uint32_t kAnchorVersion = 1;
-// |raw| bound of an anchor coordinate: 2^20 scene units (R1-FRM-021).
-inline constexpr std::int64_t kAnchorCoordMax = std::int64_t{1} << 52;
+// The bytes (anchor_bytes, parse_anchor, anchor_digest) are the format library's,
+// r1/format/anchor.hpp.
 
 // The first anchor_count(|P|) particles with their positions in `frame`.
 Anchor make_anchor(const Snapshot& snapshot, const Frame& frame);
-// The file bytes of R1-FRM-021. Input error when the anchor itself breaks a rule of the format.
-Result<std::string> anchor_bytes(const Anchor& anchor);
-// Parses file bytes; `name` places errors ("NAME: byte N: ...").
-Result<Anchor> parse_anchor(std::span<const std::uint8_t> bytes, const std::string& name);
 Result<Anchor> read_anchor(const std::string& path);
+// Reads the anchor file at `path` into options.anchor and names it options.anchor_name: the frame
+// stage receives the anchor as a value (R1-BKD-014). An empty path leaves the options unchanged.
+Status load_anchor(EpochOptions& options, const std::string& path);
 // Writes atomically (R1-ERR-003) and returns the digest of the bytes written.
 Result<hemera::Digest> write_anchor(const Anchor& anchor, const std::string& path);
-// hemera::root_hash of anchor_bytes (R1-FRM-022).
-Result<hemera::Digest> anchor_digest(const Anchor& anchor);
 
 // ---- Procrustes (R1-FRM-031..037) ---------------------------------------------------------------
 

@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/hierarchy.hpp"
 #include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
 #include "r1/spec/progress.hpp"
 #include "r1/spec/snapshot.hpp"
 #include "r1/spec/status.hpp"
@@ -19,12 +21,6 @@
 namespace r1 {
 
 using Color = std::array<std::uint8_t, 3>;
-
-struct HierarchyOptions {
-  // The finest clustering radius r_0 as a Q32 raw (scene units, >= 0). Unset: chosen from the data
-  // by the search of R1-HIER-030..033.
-  std::optional<std::int64_t> radius0_raw;
-};
 
 // Builds the hierarchy of R1-HIER-001..043. pos, phi, color and ids are per particle in canonical
 // order (all the same length, at least 1); phi raws are > 0 and sum to exactly 2^32; ids are
@@ -34,15 +30,8 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
                                   std::span<const Color> color, std::span<const ParticleId> ids,
                                   const HierarchyOptions& options = {}, const ProgressFn& progress = {});
 
-// The canonical little-endian serialisation of R1-HIER-050; its Hemera hash is the topology
-// digest (R1-HIER-051) that 12.1 requires to be bit-identical across implementations.
-std::string hierarchy_bytes(const Hierarchy& h);
-hemera::Digest hierarchy_digest(const Hierarchy& h);
-
-// Reads bytes written by hierarchy_bytes (R1-HIER-052): every field bounds-checked, a malformed
-// or truncated input is an input error naming `name` and the byte offset. The structure is not
-// validated against particle data here: check_hierarchy does that.
-Result<Hierarchy> parse_hierarchy_bytes(std::string_view bytes, const std::string& name);
+// The canonical bytes (hierarchy_bytes, parse_hierarchy_bytes, hierarchy_digest) are the format
+// library's: r1/format/hierarchy.hpp, included here.
 
 // Clusters per level, finest first.
 std::array<std::size_t, kLevels> hierarchy_counts(const Hierarchy& h);

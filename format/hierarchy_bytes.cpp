@@ -1,23 +1,15 @@
 // The canonical little-endian bytes of a hierarchy, their parser and the topology digest
-// (R1-HIER-050..052).
-#include "r1/reference/hierarchy.hpp"
+// (R1-HIER-050..052, R1-FMT-020).
+#include "r1/format/hierarchy.hpp"
+
+#include "r1/fixedpoint/int128.hpp"
+#include "r1/format/bytes.hpp"
 
 namespace r1 {
 
-namespace {
-
-void put_u8(std::string& out, std::uint8_t v) { out.push_back(static_cast<char>(v)); }
-
-void put_u32(std::string& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFFu));
-}
-
-void put_i64(std::string& out, std::int64_t v) {
-  const auto u = static_cast<std::uint64_t>(v);  // two's complement
-  for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((u >> (8 * i)) & 0xFFu));
-}
-
-}  // namespace
+using format::put_i64;
+using format::put_u32;
+using format::put_u8;
 
 std::string hierarchy_bytes(const Hierarchy& h) {
   std::string out;
@@ -48,50 +40,11 @@ std::string hierarchy_bytes(const Hierarchy& h) {
   return out;
 }
 
-namespace {
-
-// Reads the fields of R1-HIER-050 in order; every read is bounds-checked.
-class ByteReader {
- public:
-  ByteReader(std::string_view b, const std::string& name) : b_(b), name_(name) {}
-  bool u8(std::uint8_t& v) { return take(1, [&](const unsigned char* p) { v = p[0]; }); }
-  bool u32(std::uint32_t& v) {
-    return take(4, [&](const unsigned char* p) {
-      v = 0;
-      for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(p[i]) << (8 * i);
-    });
-  }
-  bool i64(std::int64_t& v) {
-    return take(8, [&](const unsigned char* p) {
-      std::uint64_t u = 0;
-      for (int i = 0; i < 8; ++i) u |= static_cast<std::uint64_t>(p[i]) << (8 * i);
-      v = static_cast<std::int64_t>(u);
-    });
-  }
-  std::size_t offset() const { return at_; }
-  std::size_t left() const { return b_.size() - at_; }
-  Status error(const std::string& why) const { return Status::input(name_ + ": byte " + std::to_string(at_) + ": " + why); }
-
- private:
-  template <class F>
-  bool take(std::size_t k, F f) {
-    if (b_.size() - at_ < k) return false;
-    f(reinterpret_cast<const unsigned char*>(b_.data() + at_));
-    at_ += k;
-    return true;
-  }
-  std::string_view b_;
-  std::string name_;
-  std::size_t at_ = 0;
-};
-
-}  // namespace
-
 Result<Hierarchy> parse_hierarchy_bytes(std::string_view bytes, const std::string& name) {
-  ByteReader r(bytes, name);
+  format::ByteReader r(bytes, name);
   const auto truncated = [&] { return r.error("truncated hierarchy"); };
   if (bytes.substr(0, 8) != "R1HIER01") return r.error("not an r1 hierarchy (expected R1HIER01)");
-  ByteReader body(bytes.substr(8), name);
+  format::ByteReader body(bytes.substr(8), name, 8);
   std::uint32_t n = 0, levels = 0;
   if (!body.u32(n) || !body.u32(levels)) return truncated();
   if (levels != kLevels) return r.error("hierarchy has " + std::to_string(levels) + " levels, r1 reads 4");

@@ -1,7 +1,6 @@
-// Small fp64 vector algebra for the reference frame renderer (spec/render.md). The renderer is
-// fp64, single-threaded and written for clarity; pixels are not canonical (R-1.0 12.3), but every
-// operation here is plain IEEE +, -, *, /, sqrt in a fixed order so two renders on one machine
-// give the same bytes.
+// Small fp64 vector algebra shared by the frame stage's boundary types and the renderers (spec/render.md
+// R1-RND-001, R1-BKD-014). Every operation is plain IEEE +, -, *, /, sqrt in a fixed order, so two
+// renders on one machine give the same bytes; pixels are not canonical (R-1.0 12.3).
 #pragma once
 
 #include <array>

@@ -1,0 +1,58 @@
+// What an epoch is asked to compute (R1-EPO-001, R1-ENC-014, R1-ENC-040, R1-HIER-030, R1-BKD-014):
+// the options every epoch stage receives, as values. Stage-boundary types: backends and
+// accelerated paths include this, never reference/.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "r1/spec/anchor.hpp"
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/overlay.hpp"
+
+namespace r1 {
+
+// A display sRGB colour, 8 bits per channel (a particle's or a cluster's).
+using Color = std::array<std::uint8_t, 3>;
+
+struct BetweennessOptions {
+  // Exact when n (n + nnz) <= budget; otherwise k = max(min_pivots, budget / (n + nnz)) pivots
+  // (R1-ENC-014).
+  std::uint64_t budget = std::uint64_t{1} << 30;
+  std::uint32_t min_pivots = 32;
+  // When set, exactly this many pivots (0 = every particle as a source, the exact computation).
+  std::optional<std::uint32_t> pivots;
+};
+
+struct EncodingOptions {
+  std::string overlay = "none";   // none | crystal-v5 | custom
+  // The tables for overlay = custom, already read (R1-BKD-014: values, not paths); shared so that
+  // copying the options does not copy a large overlay.
+  std::shared_ptr<const CustomOverlay> custom;
+  std::string custom_name;        // names the custom overlay in messages (its file, as given)
+  bool role_shapes = true;        // shapes from roles (R1-ENC-019)
+  BetweennessOptions betweenness; // exact size limit and pivots (R1-ENC-014)
+};
+
+struct HierarchyOptions {
+  // The finest clustering radius r_0 as a Q32 raw (scene units, >= 0). Unset: chosen from the data
+  // by the search of R1-HIER-030..033.
+  std::optional<std::int64_t> radius0_raw;
+};
+
+struct EpochOptions {
+  NumericDomain domain = NumericDomain::kQ32;
+  TriKernelParams trikernel;
+  SpectralParams spectral;
+  // The anchor of an earlier epoch to align to, already read (R1-BKD-014); unset: genesis epoch.
+  std::optional<Anchor> anchor;
+  std::string anchor_name = "anchor";  // names the anchor in messages (its file, as given)
+  EncodingOptions encoding;
+  HierarchyOptions hierarchy;
+  bool parallel = false;    // TBB row loops in spectral and focus: bit-identical results (R1-SPEC-071, R1-FOC-090)
+};
+
+}  // namespace r1

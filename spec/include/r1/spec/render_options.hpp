@@ -1,0 +1,37 @@
+// What the frame stage is asked and what it reports (spec/render.md R1-RND-050..058, R1-RND-090,
+// R1-BKD-014): the T-infinity field parameters, the render options and the frame statistics, as
+// stage-boundary values every backend shares.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+namespace r1::render {
+
+struct FieldParams {
+  int samples = 128;         // N of 7.2
+  double kappa = 0.25;       // density gain (R1-RND-052)
+  double cutoff = 4.0;       // nodes farther than cutoff * sigma are skipped (R1-RND-054)
+  double theta = 0.25;       // a node with extent <= theta * sigma is one aggregate (R1-RND-054)
+  double stop = 1e-3;        // the march ends when the field's transmittance falls below this
+};
+
+// Options that do not belong in a view file.
+struct RenderOptions {
+  FieldParams field;
+  bool timings = true;
+};
+
+struct FrameStats {
+  std::array<std::uint64_t, 5> tier_count{};  // visible particles per tier (T0..T-inf)
+  std::uint64_t visible = 0, culled_nodes = 0, nodes_tested = 0;
+  std::uint64_t edges_in_view = 0;     // layout edges with both endpoints visible
+  std::uint64_t edges_considered = 0;  // layout edges with an endpoint at T2 or above
+  std::uint64_t edges_drawn = 0;       // tube instances after bundling
+  std::uint64_t splats = 0, labels = 0;
+  std::uint64_t field_walked = 0, field_candidates = 0, field_samples = 0, field_evaluations = 0;
+  // Seconds per stage.
+  double cull_s = 0, impostor_s = 0, edge_s = 0, splat_s = 0, field_s = 0, label_s = 0, total_s = 0;
+};
+
+}  // namespace r1::render

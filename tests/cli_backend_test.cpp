@@ -1,0 +1,91 @@
+// `--backend` on every command that runs stages (spec/backends.md R1-BKD-003, R1-BKD-016): epoch,
+// render, spectrum, golden and conform take the option, else $R1_BACKEND, else reference; an
+// unknown name is one line naming the built backends and exit 2, and the chosen backend did the work.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <string>
+
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using r1::test::run_cli;
+
+class BackendEnv {
+ public:
+  explicit BackendEnv(const char* value) {
+    if (const char* v = std::getenv("R1_BACKEND")) saved_ = v, had_ = true;
+    if (value) setenv("R1_BACKEND", value, 1);
+    else unsetenv("R1_BACKEND");
+  }
+  ~BackendEnv() {
+    if (had_) setenv("R1_BACKEND", saved_.c_str(), 1);
+    else unsetenv("R1_BACKEND");
+  }
+
+ private:
+  std::string saved_;
+  bool had_ = false;
+};
+
+TEST(CliBackend, EveryStageCommandRejectsAnUnknownBackendWithTheBuiltNames) {
+  BackendEnv env(nullptr);
+  r1::test::TempDir d;
+  ASSERT_EQ(run_cli({"gen", "ring", "--n", "30", "-o", (d / "g.graph").string()}).exit_code, 0);
+  ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "-q", "-o", (d / "e").string()}).exit_code, 0);
+  const std::vector<std::vector<std::string>> commands = {
+      {"epoch", (d / "g.graph").string(), "-o", (d / "x").string()},
+      {"render", (d / "e").string(), "-o", (d / "x.png").string()},
+      {"spectrum", (d / "g.graph").string()},
+      {"golden", "-o", (d / "gold").string()},
+      {"conform", "-o", (d / "c.toml").string()},
+  };
+  for (auto args : commands) {
+    args.push_back("--backend");
+    args.push_back("no-such-backend");
+    const auto r = run_cli(args);
+    EXPECT_EQ(r.exit_code, 2) << args[0];
+    EXPECT_NE(r.err.find("unknown backend 'no-such-backend' (built: reference"), std::string::npos) << args[0] << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "x"));
+  EXPECT_FALSE(fs::exists(d / "gold"));
+}
+
+TEST(CliBackend, TheEnvironmentChoosesWhenTheOptionIsAbsentAndTheOptionWins) {
+  r1::test::TempDir d;
+  ASSERT_EQ(run_cli({"gen", "ba", "--n", "200", "-o", (d / "g.graph").string()}).exit_code, 0);
+  {
+    BackendEnv env(nullptr);
+    ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "--no-timings", "-q", "-o", (d / "ref").string()}).exit_code, 0);
+  }
+  BackendEnv env("null");
+  // $R1_BACKEND=null: the null backend's epoch, which is not the reference's.
+  ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "--no-timings", "-q", "-o", (d / "null").string()}).exit_code, 0);
+  EXPECT_NE(r1::test::read_file(d / "null" / "positions.q32"), r1::test::read_file(d / "ref" / "positions.q32"));
+  // The option wins over the environment: the parallel backend gives the reference's bytes.
+  ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "--backend", "parallel", "--no-timings", "-q", "-o",
+                     (d / "par").string()})
+                .exit_code,
+            0);
+  for (const char* f : {"manifest.json", "positions.q32", "hierarchy.bin", "anchor.bin"})
+    EXPECT_EQ(r1::test::read_file(d / "par" / f), r1::test::read_file(d / "ref" / f)) << f;
+  // render through the environment's backend: null draws nothing, so the frame is background only.
+  const auto r = run_cli({"render", (d / "ref").string(), "--size", "32x18", "-q", "-o", (d / "n.png").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const auto ref = run_cli({"render", (d / "ref").string(), "--backend", "reference", "--size", "32x18", "-q", "-o",
+                            (d / "r.png").string()});
+  EXPECT_EQ(ref.exit_code, 0) << ref.err;
+  EXPECT_NE(r1::test::read_file(d / "n.png"), r1::test::read_file(d / "r.png"));
+  // spectrum through the chosen backend: null's vectors are all zero.
+  const auto s = run_cli({"spectrum", (d / "g.graph").string(), "--json"});
+  EXPECT_EQ(s.exit_code, 0) << s.err;
+  const auto fp = run_cli({"spectrum", (d / "g.graph").string(), "--domain", "fp64"});
+  EXPECT_EQ(fp.exit_code, 2);
+  EXPECT_NE(fp.err.find("--domain fp64"), std::string::npos) << fp.err;
+}
+
+}  // namespace
