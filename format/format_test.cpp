@@ -8,6 +8,7 @@
 #include "r1/format/arrays.hpp"
 #include "r1/format/bytes.hpp"
 #include "r1/format/golden.hpp"
+#include "r1/format/hierarchy.hpp"
 
 namespace {
 
@@ -93,6 +94,31 @@ TEST(Golden, TopologyBytesRoundTripAndNameTheTruncation) {
   auto cut = format::parse_topology_bytes(b.substr(0, b.size() - 2), "t.bin");
   ASSERT_FALSE(cut.is_ok());
   EXPECT_NE(cut.status().message().find("truncated topology"), std::string::npos) << cut.status().message();
+}
+
+// A hierarchy cut short names the byte where reading stopped, not the start of the file.
+TEST(Hierarchy, BytesRoundTripAndTheTruncationNamesItsOffset) {
+  r1::Hierarchy h;
+  for (int l = 0; l < r1::kLevels; ++l) {
+    r1::ClusterNode node;
+    node.level = static_cast<std::uint32_t>(l);
+    node.children = {0};
+    h.levels[l].push_back(node);
+    h.cluster_of[l] = {0};
+  }
+  const std::string b = r1::hierarchy_bytes(h);
+  auto back = r1::parse_hierarchy_bytes(b, "h.bin");
+  ASSERT_TRUE(back.is_ok()) << back.status().message();
+  EXPECT_EQ(r1::hierarchy_bytes(*back), b);
+  // 20 bytes: the magic, n, the level count and 4 of level 0's radius; reading stops at byte 16.
+  auto cut = r1::parse_hierarchy_bytes(b.substr(0, 20), "h.bin");
+  ASSERT_FALSE(cut.is_ok());
+  EXPECT_EQ(cut.status().message(), "h.bin: byte 16: truncated hierarchy");
+  std::string three = b;
+  three[12] = 3;  // the level count, little-endian at bytes 12..15
+  auto bad = r1::parse_hierarchy_bytes(three, "h.bin");
+  ASSERT_FALSE(bad.is_ok());
+  EXPECT_EQ(bad.status().message(), "h.bin: byte 12: hierarchy has 3 levels, r1 reads 4");
 }
 
 }  // namespace

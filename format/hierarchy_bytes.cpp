@@ -41,13 +41,15 @@ std::string hierarchy_bytes(const Hierarchy& h) {
 }
 
 Result<Hierarchy> parse_hierarchy_bytes(std::string_view bytes, const std::string& name) {
-  format::ByteReader r(bytes, name);
-  const auto truncated = [&] { return r.error("truncated hierarchy"); };
-  if (bytes.substr(0, 8) != "R1HIER01") return r.error("not an r1 hierarchy (expected R1HIER01)");
-  format::ByteReader body(bytes.substr(8), name, 8);
+  // One reader past the magic: its errors name the byte where reading stopped.
+  format::ByteReader body(bytes, name);
+  if (bytes.substr(0, 8) != "R1HIER01") return body.error("not an r1 hierarchy (expected R1HIER01)");
+  body.skip(8);
+  const auto truncated = [&] { return body.error("truncated hierarchy"); };
   std::uint32_t n = 0, levels = 0;
   if (!body.u32(n) || !body.u32(levels)) return truncated();
-  if (levels != kLevels) return r.error("hierarchy has " + std::to_string(levels) + " levels, r1 reads 4");
+  if (levels != kLevels)
+    return body.error_at(body.offset() - 4, "hierarchy has " + std::to_string(levels) + " levels, r1 reads 4");
   Hierarchy h;
   for (std::size_t l = 0; l < kLevels; ++l) {
     std::uint32_t count = 0;
