@@ -1,6 +1,5 @@
 // r1 spectrum FILE [--backend NAME]: the spectral embedding alone, for inspection, timing and the
 // eigsh peer comparison (R1-SPEC-060..064, R1-SPEC-070..071, R1-BKD-016).
-#include <bit>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -12,6 +11,7 @@
 #include "input_options.hpp"
 #include "progress.hpp"
 #include "timing.hpp"
+#include "r1/format/bytes.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_io.hpp"
@@ -41,15 +41,13 @@ double as_double(double v) { return v; }
 // u_2..u_6 as little-endian doubles, n rows of 5, row-major (Q32 entries convert exactly).
 template <class Scalar>
 Status write_vectors(const Spectrum<Scalar>& s, const std::string& path) {
-  static_assert(std::endian::native == std::endian::little, "the --vectors format is little-endian");
   AtomicFile f(path);
   R1_TRY(f.open());
   std::string buf;
   buf.reserve(1u << 20);
   for (std::uint32_t i = 0; i < s.n; ++i) {
     for (std::size_t c = 0; c < 5; ++c) {
-      const double v = as_double(s.u[c][i]);
-      buf.append(reinterpret_cast<const char*>(&v), sizeof v);
+      format::put_f64(buf, as_double(s.u[c][i]));
     }
     if (buf.size() >= (1u << 20)) {
       R1_TRY(f.write(buf));

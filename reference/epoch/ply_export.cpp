@@ -2,13 +2,13 @@
 #include "r1/reference/ply_export.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/bytes.hpp"
 
 namespace r1 {
 
@@ -34,12 +34,6 @@ std::string ply_header(std::size_t n, const hemera::Digest& snapshot) {
 // by 2^-32 is exact for every Q32 magnitude, so there is no double rounding through fp64.
 float q32_float(Q32 q) { return static_cast<float>(q.raw) * 0x1p-32f; }
 
-void put_float(std::string& out, float v) {
-  const auto u = std::bit_cast<std::uint32_t>(v);
-  // Byte by byte: little-endian whatever the host.
-  for (int s = 0; s < 32; s += 8) out.push_back(static_cast<char>((u >> s) & 0xFFu));
-}
-
 }  // namespace
 
 std::string ply_bytes(const Epoch& e) {
@@ -49,16 +43,16 @@ std::string ply_bytes(const Epoch& e) {
   // The same for every particle: logit of the fixed opacity.
   const float opacity = static_cast<float>(std::log(kSplatOpacity / (1 - kSplatOpacity)));
   for (std::size_t i = 0; i < n; ++i) {
-    for (Q32 c : e.frame.position[i]) put_float(out, q32_float(c));
-    for (int k = 0; k < 3; ++k) put_float(out, 0.0f);  // normals: unused by splat viewers
-    for (std::uint8_t c : e.encoding.color[i]) put_float(out, static_cast<float>((c / 255.0 - 0.5) / kShC0));
-    for (std::size_t k = 0; k < kRestCoefficients; ++k) put_float(out, 0.0f);  // no view dependence
-    put_float(out, opacity);
+    for (Q32 c : e.frame.position[i]) format::put_f32(out, q32_float(c));
+    for (int k = 0; k < 3; ++k) format::put_f32(out, 0.0f);  // normals: unused by splat viewers
+    for (std::uint8_t c : e.encoding.color[i]) format::put_f32(out, static_cast<float>((c / 255.0 - 0.5) / kShC0));
+    for (std::size_t k = 0; k < kRestCoefficients; ++k) format::put_f32(out, 0.0f);  // no view dependence
+    format::put_f32(out, opacity);
     // Isotropic: the particle is a sphere. The clamp only guards ln(0) (see kSplatMinSigma).
     const double sigma = std::max(kSplatSigmaPerRadius * e.encoding.radius[i].to_double(), kSplatMinSigma);
     const float scale = static_cast<float>(std::log(sigma));
-    for (int k = 0; k < 3; ++k) put_float(out, scale);
-    for (float r : {1.0f, 0.0f, 0.0f, 0.0f}) put_float(out, r);  // quaternion (w, x, y, z): identity
+    for (int k = 0; k < 3; ++k) format::put_f32(out, scale);
+    for (float r : {1.0f, 0.0f, 0.0f, 0.0f}) format::put_f32(out, r);  // quaternion (w, x, y, z): identity
   }
   return out;
 }

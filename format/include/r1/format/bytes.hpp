@@ -26,8 +26,9 @@ inline void put_u64(std::string& out, std::uint64_t v) {
   for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFFu));
 }
 inline void put_i64(std::string& out, std::int64_t v) { put_u64(out, static_cast<std::uint64_t>(v)); }
-// An IEEE binary64 by its bits (no rounding, NaN payloads kept).
+// An IEEE binary64 or binary32 by its bits (no rounding, NaN payloads kept).
 inline void put_f64(std::string& out, double v) { put_u64(out, std::bit_cast<std::uint64_t>(v)); }
+inline void put_f32(std::string& out, float v) { put_u32(out, std::bit_cast<std::uint32_t>(v)); }
 inline void put_bytes(std::string& out, std::span<const std::uint8_t> b) {
   out.append(reinterpret_cast<const char*>(b.data()), b.size());
 }
