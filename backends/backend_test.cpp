@@ -100,17 +100,17 @@ TEST(Backend, TheChosenBackendIsTheOneThatRan) {
   EXPECT_EQ(b.name(), "null");
   auto e = backends::run_epoch(b, in.snapshot, in.graph, {});
   ASSERT_TRUE(e.is_ok()) << e.status().message();
-  EXPECT_EQ(b.calls().spectral, 1u);
-  EXPECT_EQ(b.calls().focus, 1u);
-  EXPECT_EQ(b.calls().frame, 1u);
-  EXPECT_EQ(b.calls().encoding, 1u);
-  EXPECT_EQ(b.calls().hierarchy, 1u);
+  EXPECT_EQ(b.calls()[Stage::kSpectral], 1u);
+  EXPECT_EQ(b.calls()[Stage::kFocus], 1u);
+  EXPECT_EQ(b.calls()[Stage::kFrame], 1u);
+  EXPECT_EQ(b.calls()[Stage::kEncoding], 1u);
+  EXPECT_EQ(b.calls()[Stage::kHierarchy], 1u);
   EXPECT_EQ((*reference)->calls().total(), 0u);
   // Null's focus is uniform, which the ring's reference focus also is; its positions are not.
   auto ref = backends::run_epoch(**reference, in.snapshot, in.graph, {});
   ASSERT_TRUE(ref.is_ok());
   EXPECT_NE(e->frame.position, ref->frame.position);
-  EXPECT_EQ((*reference)->calls().spectral, 1u);
+  EXPECT_EQ((*reference)->calls()[Stage::kSpectral], 1u);
 }
 
 // The reference adapter runs the reference's own functions: the epoch files it produces are the
@@ -130,7 +130,7 @@ TEST(Backend, ReferenceAndParallelAdaptersGiveTheReferenceEpochBytes) {
       auto got = epoch_files(*e);
       ASSERT_TRUE(got.is_ok());
       EXPECT_EQ(*got, *want) << name;
-      EXPECT_EQ((*b)->calls().hierarchy, 1u);
+      EXPECT_EQ((*b)->calls()[Stage::kHierarchy], 1u);
     }
   }
 }

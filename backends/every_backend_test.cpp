@@ -76,11 +76,11 @@ TEST_P(EveryBackend, RunsEveryStageOnceAndReturnsAWellFormedEpochAndFrame) {
   auto e = backends::run_epoch(**b, in.snapshot, in.graph, {});
   ASSERT_TRUE(e.is_ok()) << e.status().message();
   const auto& calls = (*b)->calls();
-  EXPECT_EQ(calls.spectral, 1u);
-  EXPECT_EQ(calls.focus, 1u);
-  EXPECT_EQ(calls.frame, 1u);
-  EXPECT_EQ(calls.encoding, 1u);
-  EXPECT_EQ(calls.hierarchy, 1u);
+  EXPECT_EQ(calls[Stage::kSpectral], 1u);
+  EXPECT_EQ(calls[Stage::kFocus], 1u);
+  EXPECT_EQ(calls[Stage::kFrame], 1u);
+  EXPECT_EQ(calls[Stage::kEncoding], 1u);
+  EXPECT_EQ(calls[Stage::kHierarchy], 1u);
   ASSERT_EQ(e->ids.size(), in.snapshot.particles.size());
   std::int64_t sum = 0;
   for (Q32 p : e->focus.phi) sum += p.raw;
@@ -91,7 +91,7 @@ TEST_P(EveryBackend, RunsEveryStageOnceAndReturnsAWellFormedEpochAndFrame) {
   ASSERT_TRUE(img.is_ok()) << img.status().message();
   EXPECT_EQ(img->width, v.width);
   EXPECT_EQ(img->height, v.height);
-  EXPECT_EQ(calls.render, 1u);
+  EXPECT_EQ(calls[Stage::kRender], 1u);
 }
 
 TEST_P(EveryBackend, AConformantBackendIsTheReferenceBitForBit) {

@@ -82,7 +82,7 @@ Status run_conform(const ConformCliOptions& o) {
             }));
   const auto& calls = backend->calls();
   std::printf("conform: %s ran %llu epoch stage calls and %llu frames\n", name.c_str(),
-              static_cast<unsigned long long>(calls.total() - calls.render), static_cast<unsigned long long>(calls.render));
+              static_cast<unsigned long long>(calls.total() - calls[Stage::kRender]), static_cast<unsigned long long>(calls[Stage::kRender]));
   const std::string toml = conformance::sidecar_toml(rep);
   R1_TRY(write_file_atomic(out, toml));
   std::printf("%s", toml.c_str());

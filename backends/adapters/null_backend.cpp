@@ -17,7 +17,7 @@ class NullBackend final : public Backend {
   Domain numeric_domain() const override { return Domain::kFixedQ32; }
 
   Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn&) override {
-    ++calls_.spectral;
+    ++calls_[Stage::kSpectral];
     Spectrum<Q32> s;
     s.n = g.n;
     s.rho = o.spectral.rho.value_or(0.0);
@@ -26,7 +26,7 @@ class NullBackend final : public Backend {
     return s;
   }
   Result<Focus<Q32>> focus(const Graph& g, const EpochOptions&, double, const ProgressFn&) override {
-    ++calls_.focus;
+    ++calls_[Stage::kFocus];
     // Uniform focus whose raws still sum to exactly 2^32 (well-formed, R1-FOC-010): the
     // largest-remainder share of equal weights, floor(2^32 / n) each and one more raw for the
     // first 2^32 mod n particles (equal remainders go to the lower index).
@@ -38,7 +38,7 @@ class NullBackend final : public Backend {
     return f;
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>&, const Anchor*, const std::string&) override {
-    ++calls_.frame;
+    ++calls_[Stage::kFrame];
     // Particles scattered over a fixed integer lattice inside |x|, |y|, |z| <= 500, by index
     // alone: right shape and range, unrelated to the graph.
     Frame f;
@@ -52,7 +52,7 @@ class NullBackend final : public Backend {
   }
   Result<Encoding> encoding(const Snapshot& s, const Graph&, const Focus<Q32>& focus, const Spectrum<Q32>&,
                             const EncodingOptions& o, const ProgressFn&) override {
-    ++calls_.encoding;
+    ++calls_[Stage::kEncoding];
     const std::size_t n = s.particles.size();
     Encoding e;
     e.overlay = o.overlay;
@@ -69,7 +69,7 @@ class NullBackend final : public Backend {
   Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
                               std::span<const Color>, std::span<const ParticleId>, const HierarchyOptions&,
                               const ProgressFn&) override {
-    ++calls_.hierarchy;
+    ++calls_[Stage::kHierarchy];
     // Runs of 16 consecutive particles, then runs of 16 consecutive clusters: a valid tree with
     // at most 16 children that ignores the geometry.
     Hierarchy h;
@@ -111,7 +111,7 @@ class NullBackend final : public Backend {
   }
   Result<render::Image> render(const Epoch&, const render::View& v, const render::RenderOptions&,
                                render::FrameStats*, const ProgressFn&) override {
-    ++calls_.render;
+    ++calls_[Stage::kRender];
     return render::Image(v.width, v.height);  // nothing drawn: the background alone
   }
 };

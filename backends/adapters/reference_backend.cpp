@@ -26,31 +26,31 @@ class ReferenceBackend final : public Backend {
   Domain numeric_domain() const override { return fp64_ ? Domain::kFp64 : Domain::kFixedQ32; }
 
   Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) override {
-    ++calls_.spectral;
+    ++calls_[Stage::kSpectral];
     return stages_.spectral(g, o, p);
   }
   Result<Focus<Q32>> focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) override {
-    ++calls_.focus;
+    ++calls_[Stage::kFocus];
     return stages_.focus(g, o, lambda2, p);
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) override {
-    ++calls_.frame;
+    ++calls_[Stage::kFrame];
     return stages_.frame(s, c, a, an);
   }
   Result<Encoding> encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
                             const EncodingOptions& o, const ProgressFn& p) override {
-    ++calls_.encoding;
+    ++calls_[Stage::kEncoding];
     return stages_.encoding(s, g, f, c, o, p);
   }
   Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
                               std::span<const Color> color, std::span<const ParticleId> ids,
                               const HierarchyOptions& o, const ProgressFn& p) override {
-    ++calls_.hierarchy;
+    ++calls_[Stage::kHierarchy];
     return stages_.hierarchy(pos, phi, color, ids, o, p);
   }
   Result<render::Image> render(const Epoch& e, const render::View& v, const render::RenderOptions& o,
                                render::FrameStats* stats, const ProgressFn& progress) override {
-    ++calls_.render;
+    ++calls_[Stage::kRender];
     // The scene is built once per epoch and reused across views. It borrows the epoch's
     // hierarchy, so the key includes that storage's address besides the epoch's own and its
     // snapshot digest: a different epoch never reuses a stale scene.

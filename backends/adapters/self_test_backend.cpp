@@ -50,15 +50,15 @@ class SelfTestBackend final : public Backend {
   Domain numeric_domain() const override { return Domain::kFixedQ32; }
 
   Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) override {
-    ++calls_.spectral;
+    ++calls_[Stage::kSpectral];
     return inner_->spectral(g, o, p);
   }
   Result<Focus<Q32>> focus(const Graph& g, const EpochOptions& o, double l2, const ProgressFn& p) override {
-    ++calls_.focus;
+    ++calls_[Stage::kFocus];
     return inner_->focus(g, o, l2, p);
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) override {
-    ++calls_.frame;
+    ++calls_[Stage::kFrame];
     R1_ASSIGN(Frame f, inner_->frame(s, c, a, an));
     if (fault_ == SelfTestFault::kPosition)
       for (auto& x : f.position) x[0] = x[0] + Q32::from_int(kShiftUnits);
@@ -66,20 +66,20 @@ class SelfTestBackend final : public Backend {
   }
   Result<Encoding> encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
                             const EncodingOptions& o, const ProgressFn& p) override {
-    ++calls_.encoding;
+    ++calls_[Stage::kEncoding];
     return inner_->encoding(s, g, f, c, o, p);
   }
   Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
                               std::span<const Color> color, std::span<const ParticleId> ids,
                               const HierarchyOptions& o, const ProgressFn& p) override {
-    ++calls_.hierarchy;
+    ++calls_[Stage::kHierarchy];
     R1_ASSIGN(Hierarchy h, inner_->hierarchy(pos, phi, color, ids, o, p));
     if (fault_ == SelfTestFault::kTopology && h.levels[0].size() >= 2) swap_clusters(h, 0, 1);
     return h;
   }
   Result<render::Image> render(const Epoch& e, const render::View& v, const render::RenderOptions& o,
                                render::FrameStats* stats, const ProgressFn& progress) override {
-    ++calls_.render;
+    ++calls_[Stage::kRender];
     R1_ASSIGN(render::Image img, inner_->render(e, v, o, stats, progress));
     if (fault_ == SelfTestFault::kHue)
       for (std::size_t i = 0; i + 3 < img.rgba.size(); i += 4) rotate_hue(&img.rgba[i], 60.0);

@@ -90,8 +90,8 @@ TEST(ConformanceProperties, ParallelPassesAll) {
   ASSERT_EQ(results.size(), 6u);
   for (const auto& r : results) EXPECT_TRUE(r.passed) << r.name << ": " << r.message;
   // The properties ran the candidate, not only the reference beside it.
-  EXPECT_GT(b->calls().hierarchy, 0u);
-  EXPECT_GT(b->calls().render, 0u);
+  EXPECT_GT(b->calls()[Stage::kHierarchy], 0u);
+  EXPECT_GT(b->calls()[Stage::kRender], 0u);
 }
 
 TEST(ConformanceProperties, NullFailsEveryProperty) {

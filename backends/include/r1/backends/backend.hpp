@@ -3,6 +3,7 @@
 // for backends with GPU-like resources.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string_view>
@@ -25,9 +26,16 @@ class Device;  // the 13.1 trait, device.hpp
 
 // How many times each stage of a backend ran: the record that proves which backend did the work
 // (R1-BKD-004). A backend counts its own calls; the harness reads them after a run.
+// Indexed by the stage list of r1/spec/stages.hpp, so a new stage needs no new field here.
 struct StageCalls {
-  std::uint64_t spectral = 0, focus = 0, frame = 0, encoding = 0, hierarchy = 0, render = 0;
-  std::uint64_t total() const { return spectral + focus + frame + encoding + hierarchy + render; }
+  std::array<std::uint64_t, kStageNames.size()> count{};
+  std::uint64_t& operator[](Stage s) { return count[static_cast<std::size_t>(s)]; }
+  std::uint64_t operator[](Stage s) const { return count[static_cast<std::size_t>(s)]; }
+  std::uint64_t total() const {
+    std::uint64_t t = 0;
+    for (const std::uint64_t c : count) t += c;
+    return t;
+  }
 };
 
 // The stage-level interface (R1-BKD-010): the stage list of r1/spec/stages.hpp, written once,
