@@ -15,6 +15,7 @@
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -35,22 +36,6 @@ Input make_input(GenKind kind, std::int64_t n) {
   EXPECT_TRUE(g.is_ok()) << g.status().message();
   return {std::move(*s), std::move(*g)};
 }
-
-// Restores R1_BACKEND when a test has changed it.
-class EnvGuard {
- public:
-  EnvGuard() {
-    if (const char* v = std::getenv(backends::kBackendEnv)) saved_ = v, had_ = true;
-  }
-  ~EnvGuard() {
-    if (had_) setenv(backends::kBackendEnv, saved_.c_str(), 1);
-    else unsetenv(backends::kBackendEnv);
-  }
-
- private:
-  std::string saved_;
-  bool had_ = false;
-};
 
 TEST(Registry, ListsReferenceFirstAndAlwaysBuildsNull) {
   const auto& all = backends::registered_backends();
@@ -73,12 +58,11 @@ TEST(Registry, AnUnbuiltBackendIsAnErrorNeverAFallback) {
 }
 
 TEST(Registry, TheEnvironmentOverridesTheDefaultAndTheOptionOverridesBoth) {
-  EnvGuard guard;
-  unsetenv(backends::kBackendEnv);
+  r1::test::ScopedEnv env(backends::kBackendEnv, nullptr);
   std::string source;
   EXPECT_EQ(backends::choose_backend_name("", &source), "reference");
   EXPECT_EQ(source, "default");
-  setenv(backends::kBackendEnv, "null", 1);
+  env.set("null");
   EXPECT_EQ(backends::choose_backend_name("", &source), "null");
   EXPECT_EQ(source, "R1_BACKEND");
   EXPECT_EQ(backends::choose_backend_name("parallel", &source), "parallel");
@@ -89,8 +73,7 @@ TEST(Registry, TheEnvironmentOverridesTheDefaultAndTheOptionOverridesBoth) {
 // counts one call of each epoch stage, the epoch carries its wrong answer, and a reference
 // backend made beside it ran nothing.
 TEST(Backend, TheChosenBackendIsTheOneThatRan) {
-  EnvGuard guard;
-  setenv(backends::kBackendEnv, "null", 1);
+  r1::test::ScopedEnv env(backends::kBackendEnv, "null");
   const Input in = make_input(GenKind::kRing, 40);
   auto chosen = backends::make_backend(backends::choose_backend_name(""));
   ASSERT_TRUE(chosen.is_ok());

@@ -14,25 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 using r1::test::run_cli;
 
-class BackendEnv {
- public:
-  explicit BackendEnv(const char* value) {
-    if (const char* v = std::getenv("R1_BACKEND")) saved_ = v, had_ = true;
-    if (value) setenv("R1_BACKEND", value, 1);
-    else unsetenv("R1_BACKEND");
-  }
-  ~BackendEnv() {
-    if (had_) setenv("R1_BACKEND", saved_.c_str(), 1);
-    else unsetenv("R1_BACKEND");
-  }
-
- private:
-  std::string saved_;
-  bool had_ = false;
-};
-
 TEST(CliBackend, EveryStageCommandRejectsAnUnknownBackendWithTheBuiltNames) {
-  BackendEnv env(nullptr);
+  r1::test::ScopedEnv env("R1_BACKEND", nullptr);
   r1::test::TempDir d;
   ASSERT_EQ(run_cli({"gen", "ring", "--n", "30", "-o", (d / "g.graph").string()}).exit_code, 0);
   ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "-q", "-o", (d / "e").string()}).exit_code, 0);
@@ -59,10 +42,10 @@ TEST(CliBackend, TheEnvironmentChoosesWhenTheOptionIsAbsentAndTheOptionWins) {
   r1::test::TempDir d;
   ASSERT_EQ(run_cli({"gen", "ba", "--n", "200", "-o", (d / "g.graph").string()}).exit_code, 0);
   {
-    BackendEnv env(nullptr);
+    r1::test::ScopedEnv env("R1_BACKEND", nullptr);
     ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "--no-timings", "-q", "-o", (d / "ref").string()}).exit_code, 0);
   }
-  BackendEnv env("null");
+  r1::test::ScopedEnv env("R1_BACKEND", "null");
   // $R1_BACKEND=null: the null backend's epoch, which is not the reference's.
   ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "--no-timings", "-q", "-o", (d / "null").string()}).exit_code, 0);
   EXPECT_NE(r1::test::read_file(d / "null" / "positions.q32"), r1::test::read_file(d / "ref" / "positions.q32"));

@@ -138,9 +138,10 @@ TEST_F(CliConform, NullFailsEveryCheck) {
 // The environment chooses the backend when --backend is not given, and the report says so.
 TEST_F(CliConform, TheEnvironmentChoosesTheBackend) {
   r1::test::TempDir dir;
-  ASSERT_EQ(setenv("R1_BACKEND", "selftest-hue", 1), 0);
-  const auto r = run_cli({"conform", "--golden", committed().string(), "--checks", "pix", "-o", (dir / "c.toml").string()});
-  unsetenv("R1_BACKEND");
+  const auto r = [&] {
+    r1::test::ScopedEnv env("R1_BACKEND", "selftest-hue");
+    return run_cli({"conform", "--golden", committed().string(), "--checks", "pix", "-o", (dir / "c.toml").string()});
+  }();
   EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
   EXPECT_NE(r.out.find("backend selftest-hue (chosen by R1_BACKEND"), std::string::npos) << r.out;
 }

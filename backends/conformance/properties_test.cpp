@@ -9,6 +9,7 @@
 #include <string>
 
 #include "r1/backends/registry.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -40,23 +41,6 @@ PropertyOptions few_cases() {
   o.tests = 5;
   return o;
 }
-
-// Sets RC_PARAMS for one test and restores it after.
-class RcParamsGuard {
- public:
-  explicit RcParamsGuard(const char* value) {
-    if (const char* v = std::getenv("RC_PARAMS")) saved_ = v, had_ = true;
-    setenv("RC_PARAMS", value, 1);
-  }
-  ~RcParamsGuard() {
-    if (had_) setenv("RC_PARAMS", saved_.c_str(), 1);
-    else unsetenv("RC_PARAMS");
-  }
-
- private:
-  std::string saved_;
-  bool had_ = false;
-};
 
 TEST(ConformanceProperties, ReferencePassesAllQuietly) {
   auto b = make("reference");
@@ -158,7 +142,7 @@ TEST(ConformanceProperties, SeedIsFixedByDefaultAndTakenFromOptionsOrRcParams) {
   ASSERT_EQ(first.size(), 5u);
   for (std::size_t i = 0; i < first.size(); ++i) EXPECT_EQ(first[i].message, again[i].message);
   {
-    RcParamsGuard env("seed=42");
+    r1::test::ScopedEnv env("RC_PARAMS", "seed=42");
     for (const auto& r : conformance::check_backend(*b, o))
       EXPECT_NE(r.message.find("(seed 42)"), std::string::npos) << r.message;
     o.seed = 7;
@@ -166,7 +150,7 @@ TEST(ConformanceProperties, SeedIsFixedByDefaultAndTakenFromOptionsOrRcParams) {
       EXPECT_NE(r.message.find("(seed 7)"), std::string::npos) << r.message;
   }
   {
-    RcParamsGuard env("seed=notanumber");
+    r1::test::ScopedEnv env("RC_PARAMS", "seed=notanumber");
     o.seed = 0;
     for (const auto& r : conformance::check_backend(*b, o)) {
       EXPECT_FALSE(r.passed);

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 extern char** environ;
 
@@ -42,6 +43,18 @@ void write_file(const fs::path& p, const std::string& bytes) {
   std::ofstream f(p, std::ios::binary | std::ios::trunc);
   f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   if (!f) throw std::runtime_error("cannot write " + p.string());
+}
+
+ScopedEnv::ScopedEnv(std::string name, const char* value) : name_(std::move(name)) {
+  if (const char* v = std::getenv(name_.c_str())) saved_ = v, had_ = true;
+  set(value);
+}
+
+ScopedEnv::~ScopedEnv() { set(had_ ? saved_.c_str() : nullptr); }
+
+void ScopedEnv::set(const char* value) {
+  if (value) setenv(name_.c_str(), value, 1);
+  else unsetenv(name_.c_str());
 }
 
 TempDir::TempDir() {

@@ -29,6 +29,22 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// Sets an environment variable (or unsets it, for nullptr) for the object's lifetime and restores
+// what was there before, so a failing assertion cannot leak the setting into later tests.
+class ScopedEnv {
+ public:
+  ScopedEnv(std::string name, const char* value);
+  ~ScopedEnv();
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+  // Changes the value again (nullptr unsets); the destructor still restores the original.
+  void set(const char* value);
+
+ private:
+  std::string name_, saved_;
+  bool had_ = false;
+};
+
 struct CliResult {
   int exit_code = -1;
   std::string out;
