@@ -13,7 +13,7 @@
 #include <tuple>
 #include <utility>
 
-#include "r1/reference/focus.hpp"
+#include "r1/solvers/focus.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 

@@ -15,7 +15,8 @@
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_io.hpp"
-#include "r1/reference/spectral.hpp"
+#include "r1/reference/operator_export.hpp"
+#include "r1/solvers/spectral.hpp"
 
 namespace r1::cli {
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The include direction (shared/DESIGN.md; spec/backends.md R1-BKD-015), checked on every source.
 
-fixedpoint <- spec <- format <- reference; spec, fixedpoint, format <- accel; backends/api <- spec;
+fixedpoint <- spec <- format; fixedpoint <- spec <- solvers (the canonical numerical stages, generic over
+their kernels, R1-SOL-001); format, solvers <- reference; format, solvers <- accel; backends/api <- spec;
 each adapter <- its implementation; drivers (the pipeline binding, conformance) and consumers
 (cli, tests, fuzz, bench) <- anything. An include against the direction is one line on stderr,
 FILE:LINE: the include and the rule, and exit status 1.
@@ -15,7 +16,8 @@ import sys
 import tempfile
 
 # Where headers are found, as the build's include directories give them (relative to ROOT).
-INCLUDE_ROOTS = ["fixedpoint/include", "spec/include", "format/include", "reference/include", "backends/include",
+INCLUDE_ROOTS = ["fixedpoint/include", "spec/include", "format/include", "solvers/include", "reference/include",
+                 "accel/cpu/include", "backends/include",
                  "reference"]
 
 # Adapters that wrap an implementation may include it (each adapter <- its implementation).
@@ -29,6 +31,7 @@ LAYER_OF = [
     ("fixedpoint/", "fixedpoint"),
     ("spec/", "spec"),
     ("format/", "format"),
+    ("solvers/", "solvers"),
     ("reference/", "reference"),
     ("accel/", "accel"),
     ("backends/include/r1/backends/", "backends-api"),
@@ -46,8 +49,9 @@ LAYER_OF = [
 BELOW = {"fixedpoint": {"fixedpoint"}}
 BELOW["spec"] = BELOW["fixedpoint"] | {"spec"}
 BELOW["format"] = BELOW["spec"] | {"format"}
-BELOW["reference"] = BELOW["format"] | {"reference"}
-BELOW["accel"] = BELOW["format"] | {"accel"}
+BELOW["solvers"] = BELOW["spec"] | {"solvers"}
+BELOW["reference"] = BELOW["format"] | BELOW["solvers"] | {"reference"}
+BELOW["accel"] = BELOW["format"] | BELOW["solvers"] | {"accel"}
 BELOW["backends-api"] = BELOW["format"] | {"backends-api", "adapter"}
 BELOW["adapter"] = BELOW["backends-api"]
 BELOW["driver"] = BELOW["reference"] | {"backends-api", "adapter", "driver"}
@@ -76,7 +80,7 @@ def resolve(root, including_dir, target):
 
 def check(root):
     problems = []
-    for top in ["fixedpoint", "spec", "format", "reference", "accel", "backends"]:
+    for top in ["fixedpoint", "spec", "format", "solvers", "reference", "accel", "backends"]:
         for dirpath, dirnames, filenames in os.walk(os.path.join(root, top)):
             dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
             for name in sorted(filenames):

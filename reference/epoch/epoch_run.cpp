@@ -6,9 +6,9 @@
 #include <cmath>
 #include <string_view>
 
-#include "r1/reference/focus.hpp"
+#include "r1/solvers/focus.hpp"
 #include "r1/reference/frame.hpp"
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/spectral.hpp"
 
 namespace r1 {
 

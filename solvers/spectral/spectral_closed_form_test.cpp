@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "block_lanczos.hpp"
-#include "panel.hpp"
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/panel.hpp"
+#include "r1/solvers/spectral.hpp"
 #include "spectral_test_support.hpp"
 #include "trivial_vector.hpp"
 

@@ -7,8 +7,8 @@
 #include <span>
 #include <vector>
 
-#include "panel.hpp"
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/panel.hpp"
+#include "r1/solvers/spectral.hpp"
 #include "r1/spec/progress.hpp"
 
 namespace r1::spectral {

@@ -2,12 +2,14 @@
 // Lanczos path, and the outputs (R1-SPEC-007, R1-SPEC-020, R1-SPEC-050..052, R1-SPEC-060..064).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
+#include <type_traits>
 
 #include "block_lanczos.hpp"
 #include "jacobi.hpp"
-#include "panel.hpp"
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/panel.hpp"
+#include "r1/solvers/spectral.hpp"
 #include "trivial_vector.hpp"
 
 namespace r1 {
@@ -125,6 +127,20 @@ std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, c
   return pairs;
 }
 
+// The kernels: a backend's (options.q32_kernels) or the portable ones.
+template <class Scalar>
+std::unique_ptr<PanelOps<Scalar>> make_ops(std::size_t n, int e, const SpectralOptions& options, int frac) {
+  if constexpr (std::is_same_v<Scalar, fx::Q32>) {
+    if (options.q32_kernels) {
+      auto k = options.q32_kernels(n, e, options.parallel, frac);
+      if (!k || k->size() != n || k->scale_exponent() != e || k->frac_bits() != frac)
+        throw std::runtime_error("spectral: the backend's kernels do not match the panel");
+      return k;
+    }
+  }
+  return std::make_unique<PanelOps<Scalar>>(n, e, options.parallel, frac);
+}
+
 template <class Scalar>
 Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, const ProgressFn& progress,
                                const SpectralOptions& options, Result<SpectralOperator<Scalar>> op_result) {
@@ -133,7 +149,8 @@ Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, con
   Spectrum<Scalar> out;
   out.n = g.n;
   out.rho = op.rho.to_double();
-  const PanelOps<Scalar> ops(g.n, op.e, options.parallel, basis_frac(op.e));
+  const std::unique_ptr<PanelOps<Scalar>> ops_ptr = make_ops<Scalar>(g.n, op.e, options, basis_frac(op.e));
+  const PanelOps<Scalar>& ops = *ops_ptr;
   const std::vector<Scalar> trivial = panel_trivial(g, op, ops.frac_bits());
   const std::uint32_t want = std::min<std::uint32_t>(kWant, g.n - 1);
   std::vector<Eigenpair<Scalar>> pairs;

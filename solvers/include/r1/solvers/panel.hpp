@@ -85,7 +85,10 @@ class Panel {
 // A list of panel columns.
 using Cols = std::span<const std::uint32_t>;
 
-// The operations the block Lanczos driver needs, for Scalar = fx::Q32 (canonical) or double.
+// The operations the block Lanczos driver needs, for Scalar = fx::Q32 (canonical) or double: the
+// solver's vector-space concept (R1-SOL-002). The kernels are virtual so that an accelerated
+// backend can run the one driver on its own kernels (accel/cpu's TBB and SIMD ones); every
+// implementation must give these functions' bits, which the kernel tests hold it to.
 // `e` fixes the scaled inner product <x, y> = 2^-e sum_i x_i y_i, under which basis vectors have
 // unit length while their entries stay O(1) (R1-SPEC-011). With `parallel`, work is split over
 // TBB tasks at fixed boundaries; every result is bit-identical to the serial one (exact sums
@@ -98,6 +101,7 @@ template <class Scalar>
 class PanelOps {
  public:
   PanelOps(std::size_t n, int e, bool parallel, int frac = 32) : n_(n), e_(e), frac_(frac), parallel_(parallel) {}
+  virtual ~PanelOps() = default;
   std::size_t size() const { return n_; }
   int scale_exponent() const { return e_; }
   int frac_bits() const { return frac_; }
@@ -105,25 +109,25 @@ class PanelOps {
 
   // out[q * ws.size() + c] = <column qs[q], column ws[c]> as a double: Q32, the exact sum of raw
   // products times 2^-(2 frac + e), correctly rounded; fp64, the pairwise dot (R1-NUM-051) times 2^-e.
-  void dots(const Panel<Scalar>& p, Cols qs, Cols ws, std::span<double> out) const;
+  virtual void dots(const Panel<Scalar>& p, Cols qs, Cols ws, std::span<double> out) const;
   double dot(const Panel<Scalar>& p, std::uint32_t a, std::uint32_t b) const;
   // For every o: column outs[o] <- (column bases[o], or 0 when bases is empty)
   //                                  + sum_t coef[t * outs.size() + o] * column terms[t],
   // one rounding per entry (Q32: coefficients enter as RNE(c 2^60), |c| < 8; fp64: left to
   // right over t, no FMA). An output column may also be a base or a term: each row's results are
   // formed from the row's old values before any is written.
-  void combine(Panel<Scalar>& p, Cols outs, Cols bases, Cols terms, std::span<const double> coef) const;
+  virtual void combine(Panel<Scalar>& p, Cols outs, Cols bases, Cols terms, std::span<const double> coef) const;
   // Column c <- column c * f (Q32: the exact product rounded once).
-  void scale(Panel<Scalar>& p, std::uint32_t c, double f) const;
+  virtual void scale(Panel<Scalar>& p, std::uint32_t c, double f) const;
   // Column c <- the random vector of R1-SPEC-030: entry i is bits(seed, i, dim) >> 31 minus
   // 2^32, times 2^-32 (uniform multiples of 2^-32 in [-1, 1)); the same values in both domains
   // and at every frac.
-  void random(Panel<Scalar>& p, std::uint32_t c, std::uint64_t seed, std::uint64_t dim) const;
+  virtual void random(Panel<Scalar>& p, std::uint32_t c, std::uint64_t seed, std::uint64_t dim) const;
   // Column dst <- column src.
-  void copy(Panel<Scalar>& p, std::uint32_t dst, std::uint32_t src) const;
+  virtual void copy(Panel<Scalar>& p, std::uint32_t dst, std::uint32_t src) const;
   // Columns dst[k] <- columns src[k] for every k at once, in one sweep over the rows (a column may
   // be both a source and a destination: each row is read before it is written).
-  void move(Panel<Scalar>& p, Cols dst, Cols src) const;
+  virtual void move(Panel<Scalar>& p, Cols dst, Cols src) const;
 
  private:
   std::size_t n_;

@@ -17,7 +17,7 @@
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_builder.hpp"
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/spectral.hpp"
 
 namespace r1::spectral_test {
 

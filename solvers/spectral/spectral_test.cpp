@@ -1,7 +1,7 @@
 // The spectral embedding against known spectra (ring, path, complete, grid, torus with
 // multiplicities), Eigen's dense solver, residual and orthogonality bounds, Q32 vs fp64,
 // determinism and the TBB switch (R1-SPEC-001..072).
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/spectral.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "r1/reference/generate.hpp"
+#include "r1/reference/operator_export.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_builder.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"

@@ -1,6 +1,6 @@
 // Block kernels of the spectral solver on row-major panels, Q32 (exact sums, one rounding) and
 // fp64 (fixed orders) (R1-SPEC-011..015, R1-SPEC-030).
-#include "panel.hpp"
+#include "r1/solvers/panel.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "exact_round.hpp"
+#include "r1/solvers/exact_round.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/pairwise.hpp"
 

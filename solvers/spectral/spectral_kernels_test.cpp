@@ -11,10 +11,10 @@
 #include <cmath>
 #include <numeric>
 
-#include "exact_round.hpp"
+#include "r1/solvers/exact_round.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "jacobi.hpp"
-#include "panel.hpp"
+#include "r1/solvers/panel.hpp"
 #include "r1/fixedpoint/pairwise.hpp"
 
 namespace {

@@ -1,6 +1,6 @@
 // Focus driver: parameter checks, kappa and T(eps), the coupled tri-kernel iteration in Q32 and
 // fp64, cyberank and syntropy (R1-FOC-001..003, R1-FOC-012, R1-FOC-050, R1-FOC-060..072, R1-FOC-083).
-#include "r1/reference/focus.hpp"
+#include "r1/solvers/focus.hpp"
 
 #include <algorithm>
 #include <cmath>

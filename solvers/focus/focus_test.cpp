@@ -1,7 +1,7 @@
 // Focus phi*: exact conservation and positivity, PageRank and heat kernel against independent dense
 // references (Eigen), Bessel coefficients against Boost.Math, T(eps), determinism, symmetry
 // (R1-FOC-001..091).
-#include "r1/reference/focus.hpp"
+#include "r1/solvers/focus.hpp"
 
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>

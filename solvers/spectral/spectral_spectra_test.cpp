@@ -18,7 +18,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "r1/reference/spectral.hpp"
+#include "r1/solvers/spectral.hpp"
 #include "spectral_test_support.hpp"
 
 namespace {

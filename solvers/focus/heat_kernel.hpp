@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "focus_operators.hpp"
-#include "r1/reference/focus.hpp"
+#include "r1/solvers/focus.hpp"
 
 namespace r1::focus {
 

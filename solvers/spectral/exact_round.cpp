@@ -1,6 +1,6 @@
 // Exact roundings for the spectral solver (R1-SPEC-010..012): RNE sqrt of a ratio, RNE shift and
 // the correctly rounded double of a 192-bit exact sum.
-#include "exact_round.hpp"
+#include "r1/solvers/exact_round.hpp"
 
 #include <array>
 #include <cmath>

@@ -7,7 +7,7 @@
 
 #include "apportion.hpp"
 #include "r1/fixedpoint/pairwise.hpp"
-#include "r1/reference/focus.hpp"
+#include "r1/solvers/focus.hpp"
 
 namespace r1 {
 namespace focus {

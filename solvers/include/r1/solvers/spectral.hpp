@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,10 +16,23 @@
 
 namespace r1 {
 
+namespace spectral {
+template <class Scalar>
+class PanelOps;
+}
+
+// The Q32 kernels for a panel of n rows under the scaled inner product 2^-e with frac fraction
+// bits (spectral::PanelOps's constructor arguments).
+using Q32KernelFactory =
+    std::function<std::unique_ptr<spectral::PanelOps<fx::Q32>>(std::size_t n, int e, bool parallel, int frac)>;
+
 // How the solver runs, never what it computes: every setting gives the same bytes.
 struct SpectralOptions {
   // TBB tasks for the operator and vector kernels (R1-SPEC-071). Bit-identical to serial.
   bool parallel = false;
+  // The Q32 vector kernels the driver runs on (R1-SOL-002); empty: the portable ones
+  // (spectral::PanelOps). A backend passes its own here; the bytes must not change.
+  Q32KernelFactory q32_kernels;
 };
 
 // The operator the solver iterates on (R1-SPEC-001..006), for export and tests:
@@ -58,13 +73,5 @@ Result<Spectrum<fx::Q32>> spectral_embedding_q32(const Graph& g, const SpectralP
                                                  const ProgressFn& progress = {}, const SpectralOptions& options = {});
 Result<Spectrum<double>> spectral_embedding_f64(const Graph& g, const SpectralParams& params,
                                                 const ProgressFn& progress = {}, const SpectralOptions& options = {});
-
-// Writes the sparse part I - M of the operator as Matrix Market "coordinate real symmetric"
-// (lower triangle, 1-based, values with 17 significant digits, which reproduce every double and
-// so every Q32 entry exactly), atomically (R1-ERR-003). When rho > 0, comment lines
-// "%r1-rank-one i g_i" (1-based) carry g, and the operator is that matrix minus g g^T
-// (R1-SPEC-070).
-template <class Scalar>
-Status write_operator_matrix_market(const SpectralOperator<Scalar>& op, const std::string& path);
 
 }  // namespace r1
