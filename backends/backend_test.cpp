@@ -65,7 +65,7 @@ TEST(Registry, TheEnvironmentOverridesTheDefaultAndTheOptionOverridesBoth) {
   env.set("null");
   EXPECT_EQ(backends::choose_backend_name("", &source), "null");
   EXPECT_EQ(source, "R1_BACKEND");
-  EXPECT_EQ(backends::choose_backend_name("parallel", &source), "parallel");
+  EXPECT_EQ(backends::choose_backend_name("cpu", &source), "cpu");
   EXPECT_EQ(source, "--backend");
 }
 
@@ -97,15 +97,15 @@ TEST(Backend, TheChosenBackendIsTheOneThatRan) {
 }
 
 // The reference adapter runs the reference's own functions: the epoch files it produces are the
-// bytes r1::run_epoch writes, for the single-threaded and the parallel adapter alike.
-TEST(Backend, ReferenceAndParallelAdaptersGiveTheReferenceEpochBytes) {
+// bytes r1::run_epoch writes, for the single-threaded reference and the cpu backend alike.
+TEST(Backend, ReferenceAndCpuBackendsGiveTheReferenceEpochBytes) {
   for (GenKind kind : {GenKind::kBa, GenKind::kSbm}) {
     const Input in = make_input(kind, 300);
     auto direct = run_epoch(in.snapshot, in.graph, {});
     ASSERT_TRUE(direct.is_ok()) << direct.status().message();
     auto want = epoch_files(*direct);
     ASSERT_TRUE(want.is_ok());
-    for (const char* name : {"reference", "parallel"}) {
+    for (const char* name : {"reference", "cpu"}) {
       auto b = backends::make_backend(name);
       ASSERT_TRUE(b.is_ok());
       auto e = backends::run_epoch(**b, in.snapshot, in.graph, {});

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "adapters/adapters.hpp"
 
@@ -26,16 +27,16 @@ const std::vector<BackendInfo>& registered_backends() {
   static const std::vector<BackendInfo> all = [] {
     std::vector<BackendInfo> v;
     v.push_back({"reference", "the cpu-reference: single-threaded, Q32 epoch, fp64 frame (the oracle)", true,
-                 [] { return make_reference_backend(false); }});
-#if R1_BACKEND_PARALLEL
-    v.push_back({"parallel", "the reference stages with TBB row loops in spectral and focus (R1-SPEC-071, R1-FOC-090)",
-                 true, [] { return make_reference_backend(true); }});
+                 [] { return make_reference_backend(); }});
+#if R1_BACKEND_CPU
+    v.push_back({"cpu", "every core, vectorised exact kernels: the reference's bytes (R1-BKD-040)", true,
+                 [] { return make_cpu_backend(); }});
 #endif
 #if R1_BACKEND_FP64
     // Not expected to conform: where eigenvalues repeat (ring, torus) the fp64 and Q32 solvers
     // return different bases of the same eigenspace, so positions and topology differ (README).
     v.push_back({"fp64", "the reference stages with spectral and focus in IEEE doubles (R1-EPO-003)", false,
-                 [] { return make_reference_backend(false, true); }});
+                 [] { return make_reference_backend(true); }});
 #endif
     v.push_back({"null", "well-formed but wrong results: the suite must fail it", false, [] { return make_null_backend(); }});
 #if R1_BACKEND_SELFTEST
@@ -68,7 +69,13 @@ std::string built_names() {
 
 Result<std::unique_ptr<Backend>> make_backend(std::string_view name) {
   for (const auto& b : registered_backends())
-    if (b.name == name) return b.make();
+    if (b.name == name) {
+      try {
+        return b.make();
+      } catch (const std::invalid_argument& e) {  // a setting the backend cannot run with ($R1_CPU_SIMD)
+        return Status::input("backend '" + std::string(name) + "': " + e.what());
+      }
+    }
   if (is_known_unbuilt(name))
     return Status::input("backend '" + std::string(name) + "' is not built in this r1 (built: " + built_names() + ")");
   return Status::input("unknown backend '" + std::string(name) + "' (built: " + built_names() + ")");

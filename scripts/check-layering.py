@@ -23,6 +23,9 @@ INCLUDE_ROOTS = ["fixedpoint/include", "spec/include", "format/include", "solver
 # Adapters that wrap an implementation may include it (each adapter <- its implementation).
 ADAPTER_IMPLEMENTATION = {
     "backends/adapters/reference_backend.cpp": {"reference"},
+    "backends/adapters/stage_backend.hpp": {"reference"},  # the adapter over ReferenceStages
+    # the cpu backend: accel/cpu's kernels in the solver the reference's stage list runs (R1-BKD-043)
+    "backends/adapters/cpu_backend.cpp": {"reference", "accel", "solvers"},
     "backends/adapters/host_device.cpp": {"reference"},  # the trait over host memory: the reference's Clifford
 }
 

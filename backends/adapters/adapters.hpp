@@ -1,4 +1,4 @@
-// The adapters built into every r1 (R1-BKD-020..023): reference, parallel, null and the
+// The adapters built into r1 (R1-BKD-020..023, R1-BKD-040): reference, fp64, cpu, null and the
 // self-test backends that break one contract each. Internal to backends/.
 #pragma once
 
@@ -9,10 +9,13 @@
 
 namespace r1::backends {
 
-// The reference stages; `parallel` turns on the TBB row loops of the spectral and focus stages,
-// which give the same bits (R1-SPEC-071, R1-FOC-090); `fp64` runs the spectral and focus stages
-// in IEEE doubles (R1-EPO-003), the second numeric domain: within the bounds, not the same bits.
-std::unique_ptr<Backend> make_reference_backend(bool parallel, bool fp64 = false);
+// The reference stages; `fp64` runs the spectral and focus stages in IEEE doubles (R1-EPO-003),
+// the second numeric domain: within the bounds, not the same bits.
+std::unique_ptr<Backend> make_reference_backend(bool fp64 = false);
+
+// The cpu backend (R1-BKD-040): the reference's bytes on every core with vectorised kernels.
+// Throws std::invalid_argument when $R1_CPU_SIMD names a level this CPU lacks.
+std::unique_ptr<Backend> make_cpu_backend();
 
 // Well-formed, deliberately wrong results at every stage (R1-BKD-021).
 std::unique_ptr<Backend> make_null_backend();

@@ -1,84 +1,16 @@
-// The reference adapter (R1-BKD-020): every stage is the cpu-reference's own function
-// (r1::ReferenceStages and the reference renderer); it counts its calls (R1-BKD-004).
-#include <optional>
-
+// The reference adapters (R1-BKD-020): every stage is the cpu-reference's own function
+// (r1::ReferenceStages and the reference renderer): `reference` single-threaded, `fp64` with
+// spectral and focus in IEEE doubles.
 #include "adapters.hpp"
-#include "r1/reference/epoch.hpp"
-#include "render/renderer.hpp"
-#include "render/scene.hpp"
+#include "stage_backend.hpp"
 
 namespace r1::backends {
 
-namespace {
-
-class ReferenceBackend final : public Backend {
- public:
-  ReferenceBackend(bool parallel, bool fp64) : stages_(parallel, fp64), parallel_(parallel), fp64_(fp64) {}
-
-  std::string_view name() const override { return fp64_ ? "fp64" : (parallel_ ? "parallel" : "reference"); }
-  std::string_view summary() const override {
-    if (fp64_) return "reference stages with spectral and focus in IEEE doubles (R1-EPO-003)";
-    return parallel_ ? "reference stages with TBB row loops (same bits)" : "the single-threaded cpu-reference";
-  }
-  bool deterministic_mode() const override { return true; }
-  // The canonical epoch is Q32 (fp64 for the fp64 backend's spectral and focus stages); the frame
-  // is fp64 either way (pixels are not canonical, R-1.0 12.3).
-  Domain numeric_domain() const override { return fp64_ ? Domain::kFp64 : Domain::kFixedQ32; }
-
-  Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) override {
-    ++calls_[Stage::kSpectral];
-    return stages_.spectral(g, o, p);
-  }
-  Result<Focus<Q32>> focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) override {
-    ++calls_[Stage::kFocus];
-    return stages_.focus(g, o, lambda2, p);
-  }
-  Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) override {
-    ++calls_[Stage::kFrame];
-    return stages_.frame(s, c, a, an);
-  }
-  Result<Encoding> encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
-                            const EncodingOptions& o, const ProgressFn& p) override {
-    ++calls_[Stage::kEncoding];
-    return stages_.encoding(s, g, f, c, o, p);
-  }
-  Result<Hierarchy> hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
-                              std::span<const Color> color, std::span<const ParticleId> ids,
-                              const HierarchyOptions& o, const ProgressFn& p) override {
-    ++calls_[Stage::kHierarchy];
-    return stages_.hierarchy(pos, phi, color, ids, o, p);
-  }
-  Result<render::Image> render(const Epoch& e, const render::View& v, const render::RenderOptions& o,
-                               render::FrameStats* stats, const ProgressFn& progress) override {
-    ++calls_[Stage::kRender];
-    // The scene is built once per epoch and reused across views. It borrows the epoch's
-    // hierarchy, so the key includes that storage's address besides the epoch's own and its
-    // snapshot digest: a different epoch never reuses a stale scene.
-    const Key key{&e, e.hierarchy.levels[0].data(), e.snapshot_digest};
-    if (!scene_ || !(key_ == key)) {
-      scene_ = render::make_scene(e);
-      key_ = key;
-    }
-    return render::render_frame(*scene_, v, o, stats, progress);
-  }
-
- private:
-  struct Key {
-    const Epoch* epoch = nullptr;
-    const ClusterNode* nodes = nullptr;
-    hemera::Digest digest{};
-    bool operator==(const Key&) const = default;
-  };
-  ReferenceStages stages_;
-  bool parallel_, fp64_;
-  std::optional<render::Scene> scene_;
-  Key key_;
-};
-
-}  // namespace
-
-std::unique_ptr<Backend> make_reference_backend(bool parallel, bool fp64) {
-  return std::make_unique<ReferenceBackend>(parallel, fp64);
+std::unique_ptr<Backend> make_reference_backend(bool fp64) {
+  if (fp64)
+    return std::make_unique<StageBackend>("fp64", "reference stages with spectral and focus in IEEE doubles (R1-EPO-003)",
+                                          ReferenceStages(false, true), Domain::kFp64);
+  return std::make_unique<StageBackend>("reference", "the single-threaded cpu-reference", ReferenceStages(), Domain::kFixedQ32);
 }
 
 }  // namespace r1::backends

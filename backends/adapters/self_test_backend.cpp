@@ -42,7 +42,7 @@ void rotate_hue(float* rgb, double deg) {
 
 class SelfTestBackend final : public Backend {
  public:
-  explicit SelfTestBackend(SelfTestFault f) : fault_(f), inner_(make_reference_backend(false)) {}
+  explicit SelfTestBackend(SelfTestFault f) : fault_(f), inner_(make_reference_backend()) {}
 
   std::string_view name() const override { return self_test_name(fault_); }
   std::string_view summary() const override { return self_test_summary(fault_); }

@@ -1,4 +1,4 @@
-// Tests of the property library (R1-TEST-050..053): the reference and parallel backends pass
+// Tests of the property library (R1-TEST-050..053): the reference and cpu backends pass
 // every property, null fails every one, each self-test backend fails the property that holds
 // the contract it breaks, and the library is quiet and reproducible.
 #include "r1/conformance/properties.hpp"
@@ -68,7 +68,7 @@ TEST(ConformanceProperties, ReferencePassesAllQuietly) {
 }
 
 TEST(ConformanceProperties, ParallelPassesAll) {
-  auto b = make("parallel");
+  auto b = make("cpu");
   ASSERT_TRUE(b);
   const auto results = conformance::check_backend(*b);
   ASSERT_EQ(results.size(), 6u);

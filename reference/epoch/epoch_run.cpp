@@ -52,9 +52,11 @@ Result<Spectrum<Q32>> to_q32(const Spectrum<double>& s) {
 
 }  // namespace
 
-Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& o, const ProgressFn& progress) {
+Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& o, const ProgressFn& progress,
+                                               const Q32KernelFactory& kernels) {
   SpectralOptions so;
   so.parallel = o.parallel;
+  so.q32_kernels = kernels;
   if (o.domain == NumericDomain::kQ32) return spectral_embedding_q32(graph, o.spectral, progress, so);
   R1_ASSIGN(const Spectrum<double> s, spectral_embedding_f64(graph, o.spectral, progress, so));
   return to_q32(s);
@@ -83,8 +85,8 @@ EpochOptions ReferenceStages::adjusted(const EpochOptions& o) const {
 }
 
 Result<Spectrum<Q32>> ReferenceStages::spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) {
-  if (!parallel_ && !fp64_) return reference_spectral_stage(g, o, p);
-  return reference_spectral_stage(g, adjusted(o), p);
+  if (!parallel_ && !fp64_) return reference_spectral_stage(g, o, p, kernels_);
+  return reference_spectral_stage(g, adjusted(o), p, kernels_);
 }
 
 Result<Focus<Q32>> ReferenceStages::focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) {

@@ -1,4 +1,4 @@
-// Uses the installed backend registry and property library: runs the properties on `parallel`
+// Uses the installed backend registry and property library: runs the properties on `cpu`
 // and on `null`, and prints how many each passes.
 #include <r1/backends/registry.hpp>
 #include <r1/conformance/properties.hpp>
@@ -9,7 +9,7 @@ int main() {
   r1::conformance::PropertyOptions o;
   o.tests = 3;
   o.pixels = false;
-  for (const char* name : {"parallel", "null"}) {
+  for (const char* name : {"cpu", "null"}) {
     auto b = r1::backends::make_backend(name);
     if (!b.is_ok()) return 2;
     int passed = 0, total = 0;

@@ -4,10 +4,12 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "r1/reference/encoding.hpp"
 #include "r1/reference/hierarchy.hpp"
+#include "r1/solvers/spectral.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/epoch_options.hpp"
 #include "r1/spec/graph.hpp"
@@ -20,10 +22,12 @@ namespace r1 {
 
 // The cpu-reference's epoch stages. `parallel` turns on the TBB row loops of the spectral and
 // focus stages whatever options.parallel says (the same bits, R1-SPEC-071, R1-FOC-090); `fp64`
-// runs those two stages in IEEE doubles whatever options.domain says (R1-EPO-003).
+// runs those two stages in IEEE doubles whatever options.domain says (R1-EPO-003); `kernels`, when
+// set, are the Q32 spectral kernels the solver runs on (a backend's, the same bits: R1-SOL-002).
 class ReferenceStages final : public EpochStages {
  public:
-  explicit ReferenceStages(bool parallel = false, bool fp64 = false) : parallel_(parallel), fp64_(fp64) {}
+  explicit ReferenceStages(bool parallel = false, bool fp64 = false, Q32KernelFactory kernels = {})
+      : parallel_(parallel), fp64_(fp64), kernels_(std::move(kernels)) {}
 
   Result<Spectrum<Q32>> spectral(const Graph& graph, const EpochOptions& options, const ProgressFn& progress) override;
   Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
@@ -40,6 +44,7 @@ class ReferenceStages final : public EpochStages {
  private:
   EpochOptions adjusted(const EpochOptions& options) const;
   bool parallel_, fp64_;
+  Q32KernelFactory kernels_;
 };
 
 // Runs every stage of `stages` on a snapshot and its layout graph, in the one order of R1-EPO-001;
@@ -54,7 +59,8 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
 
 // The reference stages alone, as ReferenceStages calls them (options.domain and options.parallel
 // decide).
-Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& options, const ProgressFn& progress);
+Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& options, const ProgressFn& progress,
+                                               const Q32KernelFactory& kernels = {});
 Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& options, double lambda2,
                                          const ProgressFn& progress);
 

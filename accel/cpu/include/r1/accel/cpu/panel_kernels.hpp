@@ -1,0 +1,37 @@
+// The cpu backend's kernels for the spectral solver (spec/backends.md R1-BKD-040..044): the
+// solver's Q32 vector-space operations on all cores (TBB) with the exact inner products
+// vectorised, the SIMD level chosen at run time from what the CPU has, a portable path beside it.
+// Every level gives the bits of the portable spectral::PanelOps (R1-SPEC-011): exact sums do not
+// depend on how the products are grouped.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string_view>
+
+#include "r1/solvers/panel.hpp"
+#include "r1/solvers/spectral.hpp"
+
+namespace r1::accel::cpu {
+
+// The instruction sets the exact dot-product kernel has a path for, lowest first.
+enum class Simd { kPortable, kAvx2, kAvx512Ifma };
+std::string_view simd_name(Simd s);
+std::optional<Simd> simd_from_name(std::string_view name);
+
+// The highest level this CPU runs.
+Simd detect_simd();
+// The level the kernels use: $R1_CPU_SIMD (portable, avx2, avx512ifma) when set and supported,
+// else detect_simd(). An unknown or unsupported name is an error string in *error (and the
+// detected level is returned).
+Simd chosen_simd(std::string* error = nullptr);
+
+// The solver's Q32 kernels at `level` (which this CPU must support): dots vectorised, every
+// kernel split over TBB tasks at fixed row blocks when `parallel`.
+std::unique_ptr<spectral::PanelOps<fx::Q32>> make_panel_kernels(std::size_t n, int e, bool parallel, int frac, Simd level);
+
+// The factory the solver takes (SpectralOptions::q32_kernels) for `level`.
+Q32KernelFactory kernel_factory(Simd level);
+
+}  // namespace r1::accel::cpu

@@ -1,0 +1,104 @@
+// The cpu backend's spectral kernels against the solver's portable ones (R1-BKD-041): every SIMD
+// level this CPU runs, serial and on TBB tasks, gives the portable inner products bit for bit,
+// on entries of every magnitude (the vector paths' range, its edge, and the fall-back beyond).
+#include "r1/accel/cpu/panel_kernels.hpp"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <vector>
+
+#include "r1/fixedpoint/counter_rng.hpp"
+#include "test_support.hpp"
+
+namespace r1::accel::cpu {
+namespace {
+
+using spectral::Panel;
+using spectral::PanelOps;
+
+// A panel whose column c has entries of about `bits[c]` bits (random signs), with the extremes
+// of the vector path's range planted in a few rows.
+Panel<fx::Q32> make_panel(std::size_t n, const std::vector<int>& bits, std::uint64_t seed) {
+  Panel<fx::Q32> p(n, bits.size());
+  for (std::size_t c = 0; c < bits.size(); ++c)
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint64_t r = rng::bits(seed, i, c);
+      const int b = bits[c];
+      std::int64_t v = b >= 63 ? static_cast<std::int64_t>(r) : static_cast<std::int64_t>(r >> (64 - b)) - (std::int64_t{1} << (b - 1));
+      p.at(i, c) = fx::Q32::from_raw(v);
+    }
+  // The edges of the offset range: -2^51 is inside, 2^51 - 1 inside, 2^51 outside.
+  if (n > 300) {
+    p.at(7, 0) = fx::Q32::from_raw(-(std::int64_t{1} << 51));
+    p.at(8, 1 % bits.size()) = fx::Q32::from_raw((std::int64_t{1} << 51) - 1);
+  }
+  return p;
+}
+
+std::vector<std::uint64_t> dots_bits(const PanelOps<fx::Q32>& ops, const Panel<fx::Q32>& p, std::vector<std::uint32_t> qs,
+                                     std::vector<std::uint32_t> ws) {
+  std::vector<double> out(qs.size() * ws.size());
+  ops.dots(p, qs, ws, out);
+  std::vector<std::uint64_t> b;
+  for (double d : out) b.push_back(std::bit_cast<std::uint64_t>(d));
+  return b;
+}
+
+std::vector<Simd> levels() {
+  std::vector<Simd> v;
+  for (Simd s : {Simd::kPortable, Simd::kAvx2, Simd::kAvx512Ifma})
+    if (static_cast<int>(s) <= static_cast<int>(detect_simd())) v.push_back(s);
+  return v;
+}
+
+TEST(CpuPanelKernels, EveryLevelGivesThePortableDotsBitForBit) {
+  // Sizes: one short block, several blocks with a ragged tail, and enough rows for TBB tasks.
+  for (const std::size_t n : {std::size_t{100}, std::size_t{3 * 4096 + 37}, std::size_t{(1u << 15) + 4096 + 5}}) {
+    // Column magnitudes: typical basis entries (48-50 bits), the vector path's edge (51), beyond
+    // it (52, 57) and the portable kernel's own fall-back range (60, 63).
+    const std::vector<int> bits = {48, 49, 50, 51, 52, 57, 60, 63, 30, 48, 48};
+    const Panel<fx::Q32> p = make_panel(n, bits, 0x5eed + n);
+    std::vector<std::uint32_t> all(bits.size());
+    std::iota(all.begin(), all.end(), 0u);
+    const std::vector<std::uint32_t> block = {0, 1, 2, 9, 10, 4, 3};  // the width of a solver block
+    const PanelOps<fx::Q32> portable(n, 20, false, 48);
+    const auto want_all = dots_bits(portable, p, all, block);
+    const auto want_one = dots_bits(portable, p, {2}, {9});
+    for (const Simd s : levels())
+      for (const bool parallel : {false, true}) {
+        SCOPED_TRACE(std::string(simd_name(s)) + (parallel ? " parallel" : " serial") + " n=" + std::to_string(n));
+        const auto ops = make_panel_kernels(n, 20, parallel, 48, s);
+        EXPECT_EQ(dots_bits(*ops, p, all, block), want_all);
+        EXPECT_EQ(dots_bits(*ops, p, {2}, {9}), want_one);
+      }
+  }
+}
+
+TEST(CpuPanelKernels, TheChosenLevelFollowsTheEnvironmentAndRefusesWhatTheCpuLacks) {
+  {
+    test::ScopedEnv env("R1_CPU_SIMD", "portable");
+    std::string error;
+    EXPECT_EQ(chosen_simd(&error), Simd::kPortable);
+    EXPECT_TRUE(error.empty());
+  }
+  {
+    test::ScopedEnv env("R1_CPU_SIMD", "sse9");
+    std::string error;
+    EXPECT_EQ(chosen_simd(&error), detect_simd());
+    EXPECT_NE(error.find("unknown level 'sse9'"), std::string::npos) << error;
+  }
+  if (detect_simd() != Simd::kAvx512Ifma) {
+    test::ScopedEnv env("R1_CPU_SIMD", "avx512ifma");
+    std::string error;
+    EXPECT_EQ(chosen_simd(&error), detect_simd());
+    EXPECT_NE(error.find("does not run"), std::string::npos) << error;
+    EXPECT_THROW(make_panel_kernels(10, 4, false, 48, Simd::kAvx512Ifma), std::invalid_argument);
+  }
+}
+
+}  // namespace
+}  // namespace r1::accel::cpu

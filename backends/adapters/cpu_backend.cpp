@@ -1,0 +1,26 @@
+// The cpu backend (spec/backends.md R1-BKD-040..044): the canonical stages on every core, the
+// spectral solver on accel/cpu's kernels (exact inner products vectorised at the SIMD level the
+// CPU runs, chosen at run time or by $R1_CPU_SIMD), focus on TBB row loops; the bytes are the
+// reference's. Frame, encoding and hierarchy are the reference's stages (R1-BKD-043 says which
+// stage runs where); the frame renderer is the reference's.
+#include <stdexcept>
+#include <string>
+
+#include "adapters.hpp"
+#include "r1/accel/cpu/panel_kernels.hpp"
+#include "stage_backend.hpp"
+
+namespace r1::backends {
+
+std::unique_ptr<Backend> make_cpu_backend() {
+  std::string error;
+  const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
+  if (!error.empty()) throw std::invalid_argument(error);
+  std::string summary = "spectral on accel/cpu kernels (TBB, exact dots ";
+  summary += accel::cpu::simd_name(level);
+  summary += "), focus on TBB row loops; frame, encoding, hierarchy and render the reference's (same bits)";
+  return std::make_unique<StageBackend>("cpu", summary, ReferenceStages(true, false, accel::cpu::kernel_factory(level)),
+                                        Domain::kFixedQ32);
+}
+
+}  // namespace r1::backends
