@@ -3,6 +3,8 @@
 // that the reference adapter is the reference pipeline byte for byte.
 #include <gtest/gtest.h>
 
+#include <bit>
+
 #include <cstdlib>
 #include <cstring>
 
@@ -115,6 +117,49 @@ TEST(Backend, ReferenceAndCpuBackendsGiveTheReferenceEpochBytes) {
       EXPECT_EQ(*got, *want) << name;
       EXPECT_EQ((*b)->calls()[Stage::kHierarchy], 1u);
     }
+  }
+}
+
+// Above the size where the kernels split over TBB tasks (spectral::kParallelMin rows), at the SIMD
+// level the cpu backend chooses here: its spectral and focus stages are the reference's bits
+// (R1-BKD-040..042; accel/cpu/panel_kernels_test holds every level to the portable kernel, and a
+// level the CPU lacks must be refused by name). A 34^3 torus (39,304 particles, lambda_2
+// six-fold) keeps the solve short.
+TEST(Backend, CpuStagesAreTheReferenceBitsAboveTheParallelThreshold) {
+  GenParams p;
+  p.kind = GenKind::kTorus;
+  p.dims = {34, 34, 34};
+  auto s = generate(p);
+  ASSERT_TRUE(s.is_ok()) << s.status().message();
+  auto g = build_graph(*s);
+  ASSERT_TRUE(g.is_ok());
+  auto ref = backends::make_backend("reference");
+  ASSERT_TRUE(ref.is_ok());
+  auto want = (*ref)->spectral(*g, {}, {});
+  ASSERT_TRUE(want.is_ok()) << want.status().message();
+  auto want_focus = (*ref)->focus(*g, {}, want->eigenvalues[1], {});
+  ASSERT_TRUE(want_focus.is_ok());
+  for (const char* level : {"avx2", "avx512ifma"}) {  // refused by name when the CPU lacks it
+    r1::test::ScopedEnv env("R1_CPU_SIMD", level);
+    auto cpu = backends::make_backend("cpu");
+    if (!cpu.is_ok()) {
+      EXPECT_NE(cpu.status().message().find("does not run"), std::string::npos) << cpu.status().message();
+    }
+  }
+  {
+    r1::test::ScopedEnv env("R1_CPU_SIMD", nullptr);
+    const char* level = "chosen";
+    auto cpu = backends::make_backend("cpu");
+    ASSERT_TRUE(cpu.is_ok()) << cpu.status().message();
+    auto got = (*cpu)->spectral(*g, {}, {});
+    ASSERT_TRUE(got.is_ok()) << got.status().message();
+    EXPECT_EQ(got->passes, want->passes) << level;
+    for (std::size_t k = 0; k < 6; ++k)
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(got->eigenvalues[k]), std::bit_cast<std::uint64_t>(want->eigenvalues[k])) << level;
+    for (std::size_t k = 0; k < 5; ++k) EXPECT_TRUE(got->u[k] == want->u[k]) << level << " u_" << k + 2;
+    auto focus = (*cpu)->focus(*g, {}, got->eigenvalues[1], {});
+    ASSERT_TRUE(focus.is_ok());
+    EXPECT_TRUE(focus->phi == want_focus->phi) << level;
   }
 }
 

@@ -1,6 +1,6 @@
 // The cpu backend's spectral kernels (R1-BKD-040..044): exact Q32 inner products vectorised with
-// AVX-512 IFMA or AVX2, chosen at run time, beside the portable path; the other kernels are the
-// solver's own on TBB tasks.
+// AVX-512 IFMA or AVX2 and combinations with AVX-512 IFMA, chosen at run time, beside the portable
+// path; the other kernels are the solver's own on TBB tasks.
 //
 // The vector paths compute the same exact sum as the portable one by another grouping. A row
 // block's entries are offset to x' = x + 2^51, which lies in [0, 2^52) whenever |x| < 2^51 (the
@@ -185,6 +185,63 @@ u128 avx2_total(const std::uint64_t* l) {
   return (ac << 52) + (mid << 26) + bd;
 }
 
+// ---- combinations on AVX-512 IFMA --------------------------------------------------------------
+//
+// A combination's output entry is RNE((base 2^60 + sum_t c_t x_t) / 2^60) with c_t the
+// coefficients as multiples of 2^-60 (spectral::coef60, |c_t| < 2^63) and x_t the row's term
+// entries. With c' = c + 2^63 in [0, 2^64) split as c0 + 2^52 c1 (c0 < 2^52, c1 < 2^12) and
+// x' = x + 2^51 in [0, 2^52) (|x| < 2^51; a row with a larger entry takes the exact scalar sum):
+//   sum c x = sum c' x' - 2^51 sum c' - 2^63 sum x' + nt 2^114,
+//   sum c' x' = L0 + 2^52 (H0 + L1) + 2^104 H1,
+// where L0/H0 and L1/H1 are the low and high 52-bit halves of c0 x' and c1 x' summed per lane
+// (nt < 2^11 terms below 2^52 each: no lane wraps). Every quantity is formed modulo 2^128; the
+// true total is below 2^125 + 2^123 in magnitude, so its i128 reading is exact, and the rounding
+// is the portable kernel's.
+constexpr std::size_t kMaxIfmaTerms = 2047;
+
+struct CombinePlan {
+  std::size_t no = 0, nt = 0;
+  std::vector<std::uint64_t> c0, c1;  // [t * no + o]
+  std::vector<u128> csum;             // sum_t c'_t per output
+  std::vector<std::int64_t> coef;     // the multiples of 2^-60, for the exact scalar rows
+};
+
+// Outputs o0 .. o0 + W - 1 of 8 rows: lanes l of acc[] hold row l's sums.
+template <std::size_t W>
+__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_group(const CombinePlan& plan, const std::uint64_t* xt,
+                                                                         std::size_t o0, std::uint64_t* sums) {
+  __m512i l0[W], h0[W], l1[W], h1[W];
+  for (std::size_t j = 0; j < W; ++j) l0[j] = h0[j] = l1[j] = h1[j] = _mm512_setzero_si512();
+  for (std::size_t t = 0; t < plan.nt; ++t) {
+    const __m512i x = _mm512_loadu_si512(xt + t * 8);
+    const std::uint64_t* a = plan.c0.data() + t * plan.no + o0;
+    const std::uint64_t* b = plan.c1.data() + t * plan.no + o0;
+    for (std::size_t j = 0; j < W; ++j) {
+      const __m512i ca = _mm512_set1_epi64(static_cast<long long>(a[j]));
+      const __m512i cb = _mm512_set1_epi64(static_cast<long long>(b[j]));
+      l0[j] = _mm512_madd52lo_epu64(l0[j], x, ca);
+      h0[j] = _mm512_madd52hi_epu64(h0[j], x, ca);
+      l1[j] = _mm512_madd52lo_epu64(l1[j], x, cb);
+      h1[j] = _mm512_madd52hi_epu64(h1[j], x, cb);
+    }
+  }
+  for (std::size_t j = 0; j < W; ++j) {
+    std::uint64_t* out = sums + (o0 + j) * 32;
+    _mm512_storeu_si512(out, l0[j]);
+    _mm512_storeu_si512(out + 8, h0[j]);
+    _mm512_storeu_si512(out + 16, l1[j]);
+    _mm512_storeu_si512(out + 24, h1[j]);
+  }
+}
+
+__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_rows(const CombinePlan& plan, const std::uint64_t* xt,
+                                                                        std::uint64_t* sums) {
+  std::size_t o = 0;
+  for (; o + 4 <= plan.no; o += 4) ifma_combine_group<4>(plan, xt, o, sums);
+  for (; o + 2 <= plan.no; o += 2) ifma_combine_group<2>(plan, xt, o, sums);
+  for (; o < plan.no; ++o) ifma_combine_group<1>(plan, xt, o, sums);
+}
+
 // Columns `cols` of rows t0 .. t0 + rows - 1, offset by 2^51, into a column-major tile (IFMA: one
 // kTile run per column; AVX2: the high and the low 26 bits in two runs), adding each column's raw
 // entries to sum[] and its magnitude bits to bits[]. An entry of 2^51 or more wraps here; the bits
@@ -230,6 +287,7 @@ class CpuPanelOps final : public PanelOps<fx::Q32> {
       : PanelOps<fx::Q32>(n, e, parallel, frac), level_(level) {}
 
   void dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<double> out) const override;
+  void combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, std::span<const double> coef) const override;
 
  private:
   void block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
@@ -306,6 +364,86 @@ void CpuPanelOps::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<doub
       for (std::size_t k = 0; k < pairs; ++k) total[k].merge(part.acc[k]);
   }
   for (std::size_t k = 0; k < pairs; ++k) out[k] = spectral::to_double_scaled(total[k].total(), 2 * frac_bits() + scale_exponent());
+}
+
+void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, std::span<const double> c) const {
+  const std::size_t no = outs.size(), nt = terms.size();
+  if (level_ != Simd::kAvx512Ifma || nt == 0 || nt > kMaxIfmaTerms || no == 0)
+    return PanelOps<fx::Q32>::combine(p, outs, bases, terms, c);
+  if (c.size() != nt * no || (!bases.empty() && bases.size() != no) || p.rows() != size())
+    throw std::invalid_argument("spectral combine: sizes");
+  for (Cols cols : {outs, bases, terms})
+    for (const std::uint32_t k : cols)
+      if (k >= p.cols()) throw std::invalid_argument("panel: column out of range");
+  CombinePlan plan;
+  plan.no = no;
+  plan.nt = nt;
+  plan.c0.resize(nt * no);
+  plan.c1.resize(nt * no);
+  plan.coef.resize(nt * no);
+  plan.csum.assign(no, 0);
+  for (std::size_t k = 0; k < nt * no; ++k) {
+    plan.coef[k] = spectral::coef60(c[k]);  // throws on a NaN or |c| >= 8, as the portable kernel does
+    const std::uint64_t cp = static_cast<std::uint64_t>(plan.coef[k]) ^ (std::uint64_t{1} << 63);  // c + 2^63
+    plan.c0[k] = cp & ((std::uint64_t{1} << 52) - 1);
+    plan.c1[k] = cp >> 52;
+    plan.csum[k % no] += cp;
+  }
+  const u128 nt_ck = static_cast<u128>(nt) << 114;
+  const i128 one = i128{1} << 60;
+  auto finish = [](i128 total) {
+    const i128 r = fx::detail::rne_shift(total, 60);
+    if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
+    return static_cast<std::int64_t>(r);
+  };
+  spectral::for_row_blocks(size(), parallel(), [&](std::size_t lo, std::size_t hi) {
+    std::vector<std::uint64_t> xt(nt * 8), sums(no * 32);
+    std::vector<std::int64_t> base(no * 8), result(no * 8);
+    for (std::size_t g0 = lo; g0 < hi; g0 += 8) {
+      const std::size_t rows = std::min<std::size_t>(8, hi - g0);
+      std::uint64_t xsum[8] = {}, bits[8] = {};
+      for (std::size_t r = 0; r < 8; ++r) {
+        if (r >= rows) {  // lanes past the block's end: zeros, never written back
+          for (std::size_t t = 0; t < nt; ++t) xt[t * 8 + r] = 0;
+          continue;
+        }
+        const fx::Q32* row = p.row(g0 + r);
+        for (std::size_t t = 0; t < nt; ++t) {
+          const std::int64_t v = row[terms[t]].raw;
+          const std::uint64_t xo = static_cast<std::uint64_t>(v) + kOffset;
+          xt[t * 8 + r] = xo;
+          xsum[r] += xo;  // below nt 2^52 < 2^63 whenever the bits allow the row
+          bits[r] |= spectral::magnitude_bits(v);
+        }
+        for (std::size_t o = 0; o < no; ++o) base[o * 8 + r] = bases.empty() ? 0 : row[bases[o]].raw;
+      }
+      ifma_combine_rows(plan, xt.data(), sums.data());
+      for (std::size_t r = 0; r < rows; ++r) {
+        if ((bits[r] >> kOffsetBits) != 0) {  // an entry beyond the offset range: the exact scalar sum
+          const fx::Q32* row = p.row(g0 + r);
+          for (std::size_t o = 0; o < no; ++o) {
+            FastExact acc;
+            acc.add(static_cast<i128>(base[o * 8 + r]) * one);
+            for (std::size_t t = 0; t < nt; ++t) acc.add(static_cast<i128>(plan.coef[t * no + o]) * row[terms[t]].raw);
+            result[o * 8 + r] = acc.round_shift(60);
+          }
+          continue;
+        }
+        for (std::size_t o = 0; o < no; ++o) {
+          const std::uint64_t* l = sums.data() + o * 32;
+          const u128 cx = static_cast<u128>(l[r]) + ((static_cast<u128>(l[8 + r]) + l[16 + r]) << 52) +
+                          (static_cast<u128>(l[24 + r]) << 104);
+          const u128 total = cx - (plan.csum[o] << kOffsetBits) - (static_cast<u128>(xsum[r]) << 63) + nt_ck +
+                             static_cast<u128>(static_cast<i128>(base[o * 8 + r]) * one);
+          result[o * 8 + r] = finish(static_cast<i128>(total));
+        }
+      }
+      for (std::size_t r = 0; r < rows; ++r) {
+        fx::Q32* row = p.row(g0 + r);
+        for (std::size_t o = 0; o < no; ++o) row[outs[o]] = fx::Q32::from_raw(result[o * 8 + r]);
+      }
+    }
+  });
 }
 
 }  // namespace

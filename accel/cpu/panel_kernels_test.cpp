@@ -78,6 +78,73 @@ TEST(CpuPanelKernels, EveryLevelGivesThePortableDotsBitForBit) {
   }
 }
 
+// Combinations: every level, serial and parallel, writes the portable kernel's raws, with and
+// without bases, with outputs that are also bases or terms, up to the thick restart's width, on
+// rows inside and beyond the vector path's range.
+TEST(CpuPanelKernels, EveryLevelGivesThePortableCombinationsBitForBit) {
+  for (const std::size_t n : {std::size_t{203}, std::size_t{(1u << 15) + 4096 + 5}}) {
+    std::vector<int> bits(200, 48);
+    bits[3] = 51;
+    bits[4] = 50;
+    bits[5] = 52;   // beyond the vector path: its rows take the exact scalar sum when a term
+    bits[6] = 30;
+    const Panel<fx::Q32> start = make_panel(n, bits, 0xc0ffee + n);
+    struct Case {
+      std::vector<std::uint32_t> outs, bases, terms;
+    };
+    std::vector<std::uint32_t> many(189);
+    std::iota(many.begin(), many.end(), 7u);
+    std::vector<std::uint32_t> seventy(70);
+    std::iota(seventy.begin(), seventy.end(), 0u);
+    const std::vector<Case> cases = {
+        {{0, 1, 2, 3, 4, 5, 6}, {0, 1, 2, 3, 4, 5, 6}, {7, 8, 9, 10, 11, 12, 13, 14, 15, 16}},  // a Gram-Schmidt pass
+        {{190, 191, 192}, {}, {0, 1, 2, 3, 4}},                                                  // no bases
+        {seventy, {}, many},                                                                     // a thick restart
+        {{7}, {7}, {3}},                                                                         // one term, in range
+        {{8}, {8}, {5, 4}},                                                                      // a term beyond it
+        {{9, 10}, {11, 12}, {9, 10, 5}},                                                         // outputs are terms
+    };
+    for (std::size_t ci = 0; ci < cases.size(); ++ci) {
+      const Case& k = cases[ci];
+      std::vector<double> coef(k.terms.size() * k.outs.size());
+      for (std::size_t j = 0; j < coef.size(); ++j) {
+        // Coefficients over the whole allowed range (-8, 8), tiny ones and exact extremes.
+        const std::uint64_t r = rng::bits(0xc0ef, ci, j);
+        const double u = static_cast<double>(static_cast<std::int64_t>(r >> 11) - (std::int64_t{1} << 52)) * 0x1p-52;
+        coef[j] = j % 7 == 0 ? u * 7.999999 : (j % 7 == 1 ? u * 1e-12 : u * 0.75);
+      }
+      coef[0] = -7.999999999;
+      Panel<fx::Q32> want = start;
+      PanelOps<fx::Q32>(n, 20, false, 48).combine(want, k.outs, k.bases, k.terms, coef);
+      for (const Simd s : levels())
+        for (const bool parallel : {false, true}) {
+          SCOPED_TRACE(std::string(simd_name(s)) + (parallel ? " parallel" : " serial") + " n=" + std::to_string(n) +
+                       " case " + std::to_string(ci));
+          Panel<fx::Q32> got = start;
+          make_panel_kernels(n, 20, parallel, 48, s)->combine(got, k.outs, k.bases, k.terms, coef);
+          bool same = true;
+          for (std::size_t i = 0; i < n && same; ++i)
+            for (std::size_t c = 0; c < got.cols(); ++c)
+              if (got.at(i, c).raw != want.at(i, c).raw) {
+                ADD_FAILURE() << "row " << i << " column " << c << ": " << got.at(i, c).raw << " != " << want.at(i, c).raw;
+                same = false;
+                break;
+              }
+        }
+    }
+  }
+}
+
+// A coefficient the solver cannot take (NaN, |c| >= 8) is refused as the portable kernel refuses it.
+TEST(CpuPanelKernels, ABadCoefficientIsRefusedAtEveryLevel) {
+  Panel<fx::Q32> p = make_panel(64, {48, 48}, 3);
+  const std::vector<std::uint32_t> out = {0}, term = {1};
+  for (const Simd s : levels()) {
+    const auto ops = make_panel_kernels(64, 6, false, 48, s);
+    EXPECT_THROW(ops->combine(p, out, out, term, std::vector<double>{8.0}), fx::OverflowError) << simd_name(s);
+  }
+}
+
 TEST(CpuPanelKernels, TheChosenLevelFollowsTheEnvironmentAndRefusesWhatTheCpuLacks) {
   {
     test::ScopedEnv env("R1_CPU_SIMD", "portable");
