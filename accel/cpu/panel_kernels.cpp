@@ -89,59 +89,87 @@ struct Scratch {
   std::vector<std::uint64_t> qbits, wbits;
 };
 
-// ---- AVX-512 IFMA ----------------------------------------------------------------------------
+// ---- AVX-512 IFMA inner products ---------------------------------------------------------------
+//
+// Row-major, no transposition: a vector holds 8 list columns of one row (one masked load when the
+// list is a run of columns, a gather otherwise), each lane one pair's sums against a broadcast
+// entry of a block column. Chunks of at most 2048 rows keep every lane below 2^63 (terms below
+// 2^52), and the block columns' offset entries of a chunk (2048 x nw) stay in L2.
+constexpr std::size_t kChunk = 2048;
+constexpr std::size_t kMaxGroup = 8;  // block columns per pass over the chunk: 16 accumulators
 
-// lanes per pair: LO[8], HI[8].
-__attribute__((target("avx512f,avx512ifma"))) void ifma_tile(const std::uint64_t* x, std::size_t nq,
-                                                                const std::uint64_t* w, std::size_t nw,
-                                                                std::uint64_t* lanes) {
-  for (std::size_t q = 0; q < nq; ++q) {
-    const std::uint64_t* xq = x + q * kTile;
-    __m512i xv[kTile / 8];
-    for (std::size_t v = 0; v < kTile / 8; ++v) xv[v] = _mm512_loadu_si512(xq + v * 8);
-    std::size_t c = 0;
-    for (; c + 2 <= nw; c += 2) {
-      std::uint64_t* l0 = lanes + (q * nw + c) * 16;
-      std::uint64_t* l1 = l0 + 16;
-      __m512i lo0 = _mm512_loadu_si512(l0), hi0 = _mm512_loadu_si512(l0 + 8);
-      __m512i lo1 = _mm512_loadu_si512(l1), hi1 = _mm512_loadu_si512(l1 + 8);
-      const std::uint64_t* w0 = w + c * kTile;
-      const std::uint64_t* w1 = w0 + kTile;
-      for (std::size_t v = 0; v < kTile / 8; ++v) {
-        const __m512i a = _mm512_loadu_si512(w0 + v * 8), b = _mm512_loadu_si512(w1 + v * 8);
-        lo0 = _mm512_madd52lo_epu64(lo0, xv[v], a);
-        hi0 = _mm512_madd52hi_epu64(hi0, xv[v], a);
-        lo1 = _mm512_madd52lo_epu64(lo1, xv[v], b);
-        hi1 = _mm512_madd52hi_epu64(hi1, xv[v], b);
-      }
-      _mm512_storeu_si512(l0, lo0);
-      _mm512_storeu_si512(l0 + 8, hi0);
-      _mm512_storeu_si512(l1, lo1);
-      _mm512_storeu_si512(l1 + 8, hi1);
+struct IfmaDots {
+  std::size_t nq = 0, nq_pad = 0, nw = 0;
+  bool run = false;                   // qs is a run of consecutive columns
+  std::vector<std::int32_t> qidx;     // qs, padded to nq_pad with qs[0]
+  std::vector<std::uint64_t> wt;      // chunk rows x nw: w + 2^51
+  std::vector<std::uint64_t> lo, hi;  // [c * nq_pad + q]: the pair's lane sums
+  std::vector<std::uint64_t> xsum, xbits;  // per q: sum of x + 2^51, magnitude bits
+  std::vector<std::uint64_t> wsum, wbits;  // per c
+};
+
+// GCC 12 reports the masked shift builtin's undefined pass-through operand as maybe-uninitialized
+// (a false positive inside avx512fintrin.h); the shift's every lane is defined.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+template <std::size_t G>
+__attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(const Panel<fx::Q32>& p, std::size_t r0,
+                                                                      std::size_t rows, IfmaDots& d, std::size_t q0,
+                                                                      std::size_t c0, bool first) {
+  const std::size_t left = d.nq - q0;
+  const __mmask8 mask = left >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << left) - 1);
+  const __m256i vidx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.qidx.data() + q0));
+  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
+  __m512i lo[G], hi[G];
+  for (std::size_t j = 0; j < G; ++j) {
+    lo[j] = _mm512_loadu_si512(d.lo.data() + (c0 + j) * d.nq_pad + q0);
+    hi[j] = _mm512_loadu_si512(d.hi.data() + (c0 + j) * d.nq_pad + q0);
+  }
+  __m512i sx = _mm512_loadu_si512(d.xsum.data() + q0), bx = _mm512_loadu_si512(d.xbits.data() + q0);
+  const std::int32_t first_col = d.qidx[q0];
+  for (std::size_t r = 0; r < rows; ++r) {
+    const std::int64_t* row = &p.row(r0 + r)->raw;
+    const __m512i x = d.run ? _mm512_maskz_loadu_epi64(mask, row + first_col)
+                            : _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), mask, vidx, row, 8);
+    const __m512i xo = _mm512_add_epi64(x, off);
+    if (first) {
+      bx = _mm512_or_si512(bx, _mm512_xor_si512(x, _mm512_srai_epi64(x, 63)));
+      sx = _mm512_add_epi64(sx, xo);
     }
-    for (; c < nw; ++c) {
-      std::uint64_t* l0 = lanes + (q * nw + c) * 16;
-      __m512i lo0 = _mm512_loadu_si512(l0), hi0 = _mm512_loadu_si512(l0 + 8);
-      const std::uint64_t* w0 = w + c * kTile;
-      for (std::size_t v = 0; v < kTile / 8; ++v) {
-        const __m512i a = _mm512_loadu_si512(w0 + v * 8);
-        lo0 = _mm512_madd52lo_epu64(lo0, xv[v], a);
-        hi0 = _mm512_madd52hi_epu64(hi0, xv[v], a);
-      }
-      _mm512_storeu_si512(l0, lo0);
-      _mm512_storeu_si512(l0 + 8, hi0);
+    const std::uint64_t* wr = d.wt.data() + r * d.nw + c0;
+    for (std::size_t j = 0; j < G; ++j) {
+      const __m512i b = _mm512_set1_epi64(static_cast<long long>(wr[j]));
+      lo[j] = _mm512_madd52lo_epu64(lo[j], xo, b);
+      hi[j] = _mm512_madd52hi_epu64(hi[j], xo, b);
     }
+  }
+  for (std::size_t j = 0; j < G; ++j) {
+    _mm512_storeu_si512(d.lo.data() + (c0 + j) * d.nq_pad + q0, lo[j]);
+    _mm512_storeu_si512(d.hi.data() + (c0 + j) * d.nq_pad + q0, hi[j]);
+  }
+  if (first) {
+    _mm512_storeu_si512(d.xsum.data() + q0, sx);
+    _mm512_storeu_si512(d.xbits.data() + q0, bx);
   }
 }
 
-// sum x' w' of one pair from its lanes: LO + 2^52 HI.
-u128 ifma_total(const std::uint64_t* l) {
-  u128 lo = 0, hi = 0;
-  for (int k = 0; k < 8; ++k) {
-    lo += l[k];
-    hi += l[8 + k];
-  }
-  return lo + (hi << 52);
+#pragma GCC diagnostic pop
+
+void ifma_dots_chunk(const Panel<fx::Q32>& p, std::size_t r0, std::size_t rows, IfmaDots& d) {
+  for (std::size_t q0 = 0; q0 < d.nq; q0 += 8)
+    for (std::size_t c0 = 0; c0 < d.nw; c0 += kMaxGroup) {
+      const bool first = c0 == 0;
+      switch (std::min(kMaxGroup, d.nw - c0)) {
+        case 1: ifma_dots_group<1>(p, r0, rows, d, q0, c0, first); break;
+        case 2: ifma_dots_group<2>(p, r0, rows, d, q0, c0, first); break;
+        case 3: ifma_dots_group<3>(p, r0, rows, d, q0, c0, first); break;
+        case 4: ifma_dots_group<4>(p, r0, rows, d, q0, c0, first); break;
+        case 5: ifma_dots_group<5>(p, r0, rows, d, q0, c0, first); break;
+        case 6: ifma_dots_group<6>(p, r0, rows, d, q0, c0, first); break;
+        case 7: ifma_dots_group<7>(p, r0, rows, d, q0, c0, first); break;
+        default: ifma_dots_group<8>(p, r0, rows, d, q0, c0, first); break;
+      }
+    }
 }
 
 // ---- AVX2 ------------------------------------------------------------------------------------
@@ -200,57 +228,53 @@ u128 avx2_total(const std::uint64_t* l) {
 constexpr std::size_t kMaxIfmaTerms = 2047;
 
 struct CombinePlan {
-  std::size_t no = 0, nt = 0;
-  std::vector<std::uint64_t> c0, c1;  // [t * no + o]
+  std::size_t no = 0, nt = 0, no_pad = 0;
+  std::vector<std::uint64_t> c0, c1;  // [t * no_pad + o], zero past no
   std::vector<u128> csum;             // sum_t c'_t per output
-  std::vector<std::int64_t> coef;     // the multiples of 2^-60, for the exact scalar rows
+  std::vector<std::int64_t> coef;     // the multiples of 2^-60 [t * no + o], for the exact scalar rows
 };
 
-// Outputs o0 .. o0 + W - 1 of 8 rows: lanes l of acc[] hold row l's sums.
-template <std::size_t W>
-__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_group(const CombinePlan& plan, const std::uint64_t* xt,
-                                                                         std::size_t o0, std::uint64_t* sums) {
-  __m512i l0[W], h0[W], l1[W], h1[W];
-  for (std::size_t j = 0; j < W; ++j) l0[j] = h0[j] = l1[j] = h1[j] = _mm512_setzero_si512();
-  for (std::size_t t = 0; t < plan.nt; ++t) {
-    const __m512i x = _mm512_loadu_si512(xt + t * 8);
-    const std::uint64_t* a = plan.c0.data() + t * plan.no + o0;
-    const std::uint64_t* b = plan.c1.data() + t * plan.no + o0;
-    for (std::size_t j = 0; j < W; ++j) {
-      const __m512i ca = _mm512_set1_epi64(static_cast<long long>(a[j]));
-      const __m512i cb = _mm512_set1_epi64(static_cast<long long>(b[j]));
-      l0[j] = _mm512_madd52lo_epu64(l0[j], x, ca);
-      h0[j] = _mm512_madd52hi_epu64(h0[j], x, ca);
-      l1[j] = _mm512_madd52lo_epu64(l1[j], x, cb);
-      h1[j] = _mm512_madd52hi_epu64(h1[j], x, cb);
+// One row, outputs og .. og + 8 V - 1: a lane per output, each term's offset entry broadcast.
+// sums[k * no_pad + o] receives L0, H0, L1, H1 (k = 0..3).
+template <std::size_t V>
+__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_outputs(const CombinePlan& plan, const std::uint64_t* xo,
+                                                                           std::size_t og, std::uint64_t* sums) {
+  __m512i l0[V], h0[V], l1[V], h1[V];
+  for (std::size_t v = 0; v < V; ++v) l0[v] = h0[v] = l1[v] = h1[v] = _mm512_setzero_si512();
+  const std::uint64_t* a = plan.c0.data() + og;
+  const std::uint64_t* b = plan.c1.data() + og;
+  for (std::size_t t = 0; t < plan.nt; ++t, a += plan.no_pad, b += plan.no_pad) {
+    const __m512i x = _mm512_set1_epi64(static_cast<long long>(xo[t]));
+    for (std::size_t v = 0; v < V; ++v) {
+      const __m512i ca = _mm512_loadu_si512(a + 8 * v), cb = _mm512_loadu_si512(b + 8 * v);
+      l0[v] = _mm512_madd52lo_epu64(l0[v], x, ca);
+      h0[v] = _mm512_madd52hi_epu64(h0[v], x, ca);
+      l1[v] = _mm512_madd52lo_epu64(l1[v], x, cb);
+      h1[v] = _mm512_madd52hi_epu64(h1[v], x, cb);
     }
   }
-  for (std::size_t j = 0; j < W; ++j) {
-    std::uint64_t* out = sums + (o0 + j) * 32;
-    _mm512_storeu_si512(out, l0[j]);
-    _mm512_storeu_si512(out + 8, h0[j]);
-    _mm512_storeu_si512(out + 16, l1[j]);
-    _mm512_storeu_si512(out + 24, h1[j]);
+  for (std::size_t v = 0; v < V; ++v) {
+    _mm512_storeu_si512(sums + og + 8 * v, l0[v]);
+    _mm512_storeu_si512(sums + plan.no_pad + og + 8 * v, h0[v]);
+    _mm512_storeu_si512(sums + 2 * plan.no_pad + og + 8 * v, l1[v]);
+    _mm512_storeu_si512(sums + 3 * plan.no_pad + og + 8 * v, h1[v]);
   }
 }
 
-__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_rows(const CombinePlan& plan, const std::uint64_t* xt,
-                                                                        std::uint64_t* sums) {
-  std::size_t o = 0;
-  for (; o + 4 <= plan.no; o += 4) ifma_combine_group<4>(plan, xt, o, sums);
-  for (; o + 2 <= plan.no; o += 2) ifma_combine_group<2>(plan, xt, o, sums);
-  for (; o < plan.no; ++o) ifma_combine_group<1>(plan, xt, o, sums);
+void ifma_combine_row(const CombinePlan& plan, const std::uint64_t* xo, std::uint64_t* sums) {
+  std::size_t og = 0;
+  for (; og + 16 <= plan.no_pad; og += 16) ifma_combine_outputs<2>(plan, xo, og, sums);
+  for (; og < plan.no_pad; og += 8) ifma_combine_outputs<1>(plan, xo, og, sums);
 }
 
-// Columns `cols` of rows t0 .. t0 + rows - 1, offset by 2^51, into a column-major tile (IFMA: one
-// kTile run per column; AVX2: the high and the low 26 bits in two runs), adding each column's raw
+// Columns `cols` of rows t0 .. t0 + rows - 1, offset by 2^51,  and split into the high and the low
+// 26 bits, into a column-major tile (two kTile runs per column), adding each column's raw
 // entries to sum[] and its magnitude bits to bits[]. An entry of 2^51 or more wraps here; the bits
 // then send its pair to the exact fall-back, which never reads the tile. The tile's sum is formed
 // in 64 bits: below 2^57 whenever the bits allow the vector path (64 entries below 2^51).
-template <bool kIfma>
 void transpose(const Panel<fx::Q32>& p, Cols cols, std::size_t t0, std::size_t rows, std::uint64_t* tile, i128* sum,
                std::uint64_t* bits) {
-  constexpr std::size_t per_col = kIfma ? kTile : 2 * kTile;
+  constexpr std::size_t per_col = 2 * kTile;
   constexpr std::uint64_t low26 = (std::uint64_t{1} << 26) - 1;
   const std::size_t nc = cols.size();
   std::uint64_t tile_sum[64], tile_bits[64];
@@ -263,12 +287,8 @@ void transpose(const Panel<fx::Q32>& p, Cols cols, std::size_t t0, std::size_t r
         const std::int64_t v = row[cols[c0 + k]].raw;
         const std::uint64_t o = static_cast<std::uint64_t>(v) + kOffset;
         std::uint64_t* col = tile + (c0 + k) * per_col;
-        if constexpr (kIfma) {
-          col[i] = o;
-        } else {
-          col[i] = (o >> 26) & low26;
-          col[kTile + i] = o & low26;
-        }
+        col[i] = (o >> 26) & low26;
+        col[kTile + i] = o & low26;
         tile_sum[k] += static_cast<std::uint64_t>(v);  // wraps only when the bits refuse the pair
         tile_bits[k] |= spectral::magnitude_bits(v);
       }
@@ -290,16 +310,16 @@ class CpuPanelOps final : public PanelOps<fx::Q32> {
   void combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, std::span<const double> coef) const override;
 
  private:
-  void block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
-                 std::vector<FastExact>& acc) const;
+  void avx2_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
+                      std::vector<FastExact>& acc) const;
+  void ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, IfmaDots& d,
+                      std::vector<FastExact>& acc) const;
   Simd level_;
 };
 
-void CpuPanelOps::block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
-                            std::vector<FastExact>& acc) const {
-  const std::size_t nq = qs.size(), nw = ws.size(), pairs = nq * nw;
-  const bool ifma = level_ == Simd::kAvx512Ifma;
-  const std::size_t per_col = ifma ? kTile : 2 * kTile, per_pair = ifma ? 16 : 12;
+void CpuPanelOps::avx2_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
+                                 std::vector<FastExact>& acc) const {
+  const std::size_t nq = qs.size(), nw = ws.size(), pairs = nq * nw, per_col = 2 * kTile, per_pair = 12;
   s.x.assign(nq * per_col, 0);
   s.w.assign(nw * per_col, 0);
   s.lanes.assign(pairs * per_pair, 0);
@@ -313,22 +333,16 @@ void CpuPanelOps::block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size
       std::fill(s.x.begin(), s.x.end(), 0);
       std::fill(s.w.begin(), s.w.end(), 0);
     }
-    if (ifma) {
-      transpose<true>(p, ws, t0, rows, s.w.data(), s.sw.data(), s.wbits.data());
-      transpose<true>(p, qs, t0, rows, s.x.data(), s.sx.data(), s.qbits.data());
-      ifma_tile(s.x.data(), nq, s.w.data(), nw, s.lanes.data());
-    } else {
-      transpose<false>(p, ws, t0, rows, s.w.data(), s.sw.data(), s.wbits.data());
-      transpose<false>(p, qs, t0, rows, s.x.data(), s.sx.data(), s.qbits.data());
-      avx2_tile(s.x.data(), nq, s.w.data(), nw, s.lanes.data());
-    }
+    transpose(p, ws, t0, rows, s.w.data(), s.sw.data(), s.wbits.data());
+    transpose(p, qs, t0, rows, s.x.data(), s.sx.data(), s.qbits.data());
+    avx2_tile(s.x.data(), nq, s.w.data(), nw, s.lanes.data());
   }
   const i128 rows = static_cast<i128>(hi - lo);
   for (std::size_t q = 0; q < nq; ++q)
     for (std::size_t c = 0; c < nw; ++c) {
       const std::size_t k = q * nw + c;
       if (((s.qbits[q] | s.wbits[c]) >> kOffsetBits) == 0) {
-        const u128 t = ifma ? ifma_total(s.lanes.data() + k * per_pair) : avx2_total(s.lanes.data() + k * per_pair);
+        const u128 t = avx2_total(s.lanes.data() + k * per_pair);
         // sum x' w' < 2^116; the corrections are below 2^115: all exact in i128.
         acc[k].add(static_cast<i128>(t) - (s.sx[q] + s.sw[c]) * static_cast<i128>(kOffset) - rows * (i128{1} << 102));
       } else {
@@ -336,6 +350,55 @@ void CpuPanelOps::block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size
           acc[k].add(static_cast<i128>(p.at(i, qs[q]).raw) * p.at(i, ws[c]).raw);
       }
     }
+}
+
+void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, IfmaDots& d,
+                                 std::vector<FastExact>& acc) const {
+  const std::size_t nq = qs.size(), nw = ws.size();
+  d.nq = nq;
+  d.nw = nw;
+  d.nq_pad = (nq + 7) / 8 * 8;
+  d.run = true;
+  for (std::size_t q = 1; q < nq; ++q) d.run = d.run && qs[q] == qs[0] + q;
+  d.qidx.assign(d.nq_pad, static_cast<std::int32_t>(qs[0]));
+  for (std::size_t q = 0; q < nq; ++q) d.qidx[q] = static_cast<std::int32_t>(qs[q]);
+  for (std::size_t r0 = lo; r0 < hi; r0 += kChunk) {
+    const std::size_t rows = std::min(kChunk, hi - r0);
+    d.wt.resize(rows * nw);
+    d.wsum.assign(nw, 0);
+    d.wbits.assign(nw, 0);
+    for (std::size_t r = 0; r < rows; ++r) {
+      const fx::Q32* row = p.row(r0 + r);
+      for (std::size_t c = 0; c < nw; ++c) {
+        const std::int64_t v = row[ws[c]].raw;
+        const std::uint64_t o = static_cast<std::uint64_t>(v) + kOffset;  // wraps only when the bits refuse it
+        d.wt[r * nw + c] = o;
+        d.wsum[c] += o;  // below 2048 2^52 = 2^63 whenever the bits allow the pair
+        d.wbits[c] |= spectral::magnitude_bits(v);
+      }
+    }
+    d.lo.assign(nw * d.nq_pad, 0);
+    d.hi.assign(nw * d.nq_pad, 0);
+    d.xsum.assign(d.nq_pad, 0);
+    d.xbits.assign(d.nq_pad, 0);
+    ifma_dots_chunk(p, r0, rows, d);
+    // sum x w = sum x' w' - 2^51 (sum x' + sum w') + rows 2^102, formed modulo 2^128: the true
+    // value is below 2^11 2^102 in magnitude, so its i128 reading is exact.
+    const u128 rows_kk = static_cast<u128>(rows) << 102;
+    for (std::size_t q = 0; q < nq; ++q)
+      for (std::size_t c = 0; c < nw; ++c) {
+        std::size_t k = q * nw + c;
+        if (((d.xbits[q] | d.wbits[c]) >> kOffsetBits) == 0) {
+          const std::size_t l = c * d.nq_pad + q;
+          const u128 t = static_cast<u128>(d.lo[l]) + (static_cast<u128>(d.hi[l]) << 52) -
+                         ((static_cast<u128>(d.xsum[q]) + d.wsum[c]) << kOffsetBits) + rows_kk;
+          acc[k].add(static_cast<i128>(t));
+        } else {
+          for (std::size_t i = r0; i < r0 + rows; ++i)
+            acc[k].add(static_cast<i128>(p.at(i, qs[q]).raw) * p.at(i, ws[c]).raw);
+        }
+      }
+  }
 }
 
 void CpuPanelOps::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<double> out) const {
@@ -346,19 +409,28 @@ void CpuPanelOps::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<doub
     if (c >= p.cols()) throw std::invalid_argument("panel: column out of range");
   for (const std::uint32_t c : ws)
     if (c >= p.cols()) throw std::invalid_argument("panel: column out of range");
+  if (pairs == 0) return;
+  struct Part {
+    Scratch s;
+    IfmaDots d;
+    std::vector<FastExact> acc;
+  };
+  auto sum_block = [&](Part& part, std::vector<FastExact>& acc, std::size_t lo, std::size_t hi) {
+    if (level_ == Simd::kAvx512Ifma) {
+      ifma_block_sum(p, qs, ws, lo, hi, part.d, acc);
+    } else {
+      avx2_block_sum(p, qs, ws, lo, hi, part.s, acc);
+    }
+  };
   std::vector<FastExact> total(pairs);
   if (!parallel() || size() < spectral::kParallelMin) {
-    Scratch s;
-    spectral::for_row_blocks(size(), false, [&](std::size_t lo, std::size_t hi) { block_sum(p, qs, ws, lo, hi, s, total); });
+    Part part;
+    spectral::for_row_blocks(size(), false, [&](std::size_t lo, std::size_t hi) { sum_block(part, total, lo, hi); });
   } else {
-    struct Part {
-      Scratch s;
-      std::vector<FastExact> acc;
-    };
-    tbb::enumerable_thread_specific<Part> parts([pairs] { return Part{Scratch{}, std::vector<FastExact>(pairs)}; });
+    tbb::enumerable_thread_specific<Part> parts([pairs] { return Part{Scratch{}, IfmaDots{}, std::vector<FastExact>(pairs)}; });
     spectral::for_row_blocks(size(), true, [&](std::size_t lo, std::size_t hi) {
       Part& part = parts.local();
-      block_sum(p, qs, ws, lo, hi, part.s, part.acc);
+      sum_block(part, part.acc, lo, hi);
     });
     for (const auto& part : parts)  // exact: the merge order plays no part
       for (std::size_t k = 0; k < pairs; ++k) total[k].merge(part.acc[k]);
@@ -378,70 +450,57 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
   CombinePlan plan;
   plan.no = no;
   plan.nt = nt;
-  plan.c0.resize(nt * no);
-  plan.c1.resize(nt * no);
+  plan.no_pad = (no + 7) / 8 * 8;
+  plan.c0.assign(nt * plan.no_pad, 0);
+  plan.c1.assign(nt * plan.no_pad, 0);
   plan.coef.resize(nt * no);
   plan.csum.assign(no, 0);
-  for (std::size_t k = 0; k < nt * no; ++k) {
-    plan.coef[k] = spectral::coef60(c[k]);  // throws on a NaN or |c| >= 8, as the portable kernel does
-    const std::uint64_t cp = static_cast<std::uint64_t>(plan.coef[k]) ^ (std::uint64_t{1} << 63);  // c + 2^63
-    plan.c0[k] = cp & ((std::uint64_t{1} << 52) - 1);
-    plan.c1[k] = cp >> 52;
-    plan.csum[k % no] += cp;
-  }
+  for (std::size_t t = 0; t < nt; ++t)
+    for (std::size_t o = 0; o < no; ++o) {
+      const std::int64_t k = spectral::coef60(c[t * no + o]);  // throws on a NaN or |c| >= 8, as the portable kernel does
+      plan.coef[t * no + o] = k;
+      const std::uint64_t cp = static_cast<std::uint64_t>(k) ^ (std::uint64_t{1} << 63);  // c + 2^63
+      plan.c0[t * plan.no_pad + o] = cp & ((std::uint64_t{1} << 52) - 1);
+      plan.c1[t * plan.no_pad + o] = cp >> 52;
+      plan.csum[o] += cp;
+    }
   const u128 nt_ck = static_cast<u128>(nt) << 114;
   const i128 one = i128{1} << 60;
-  auto finish = [](i128 total) {
-    const i128 r = fx::detail::rne_shift(total, 60);
-    if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
-    return static_cast<std::int64_t>(r);
-  };
   spectral::for_row_blocks(size(), parallel(), [&](std::size_t lo, std::size_t hi) {
-    std::vector<std::uint64_t> xt(nt * 8), sums(no * 32);
-    std::vector<std::int64_t> base(no * 8), result(no * 8);
-    for (std::size_t g0 = lo; g0 < hi; g0 += 8) {
-      const std::size_t rows = std::min<std::size_t>(8, hi - g0);
-      std::uint64_t xsum[8] = {}, bits[8] = {};
-      for (std::size_t r = 0; r < 8; ++r) {
-        if (r >= rows) {  // lanes past the block's end: zeros, never written back
-          for (std::size_t t = 0; t < nt; ++t) xt[t * 8 + r] = 0;
-          continue;
-        }
-        const fx::Q32* row = p.row(g0 + r);
-        for (std::size_t t = 0; t < nt; ++t) {
-          const std::int64_t v = row[terms[t]].raw;
-          const std::uint64_t xo = static_cast<std::uint64_t>(v) + kOffset;
-          xt[t * 8 + r] = xo;
-          xsum[r] += xo;  // below nt 2^52 < 2^63 whenever the bits allow the row
-          bits[r] |= spectral::magnitude_bits(v);
-        }
-        for (std::size_t o = 0; o < no; ++o) base[o * 8 + r] = bases.empty() ? 0 : row[bases[o]].raw;
+    std::vector<std::uint64_t> xo(nt), sums(4 * plan.no_pad);
+    std::vector<std::int64_t> result(no);
+    for (std::size_t i = lo; i < hi; ++i) {
+      fx::Q32* row = p.row(i);
+      std::uint64_t xsum = 0, bits = 0;
+      for (std::size_t t = 0; t < nt; ++t) {
+        const std::int64_t v = row[terms[t]].raw;
+        xo[t] = static_cast<std::uint64_t>(v) + kOffset;
+        xsum += xo[t];  // below nt 2^52 < 2^63 whenever the bits allow the row
+        bits |= spectral::magnitude_bits(v);
       }
-      ifma_combine_rows(plan, xt.data(), sums.data());
-      for (std::size_t r = 0; r < rows; ++r) {
-        if ((bits[r] >> kOffsetBits) != 0) {  // an entry beyond the offset range: the exact scalar sum
-          const fx::Q32* row = p.row(g0 + r);
-          for (std::size_t o = 0; o < no; ++o) {
-            FastExact acc;
-            acc.add(static_cast<i128>(base[o * 8 + r]) * one);
-            for (std::size_t t = 0; t < nt; ++t) acc.add(static_cast<i128>(plan.coef[t * no + o]) * row[terms[t]].raw);
-            result[o * 8 + r] = acc.round_shift(60);
-          }
-          continue;
-        }
+      if ((bits >> kOffsetBits) != 0) {  // an entry beyond the offset range: the exact scalar sum
         for (std::size_t o = 0; o < no; ++o) {
-          const std::uint64_t* l = sums.data() + o * 32;
-          const u128 cx = static_cast<u128>(l[r]) + ((static_cast<u128>(l[8 + r]) + l[16 + r]) << 52) +
-                          (static_cast<u128>(l[24 + r]) << 104);
-          const u128 total = cx - (plan.csum[o] << kOffsetBits) - (static_cast<u128>(xsum[r]) << 63) + nt_ck +
-                             static_cast<u128>(static_cast<i128>(base[o * 8 + r]) * one);
-          result[o * 8 + r] = finish(static_cast<i128>(total));
+          FastExact acc;
+          if (!bases.empty()) acc.add(static_cast<i128>(row[bases[o]].raw) * one);
+          for (std::size_t t = 0; t < nt; ++t) acc.add(static_cast<i128>(plan.coef[t * no + o]) * row[terms[t]].raw);
+          result[o] = acc.round_shift(60);
+        }
+      } else {
+        ifma_combine_row(plan, xo.data(), sums.data());
+        const u128 xs = static_cast<u128>(xsum) << 63;
+        for (std::size_t o = 0; o < no; ++o) {
+          const std::uint64_t* l = sums.data() + o;
+          const std::size_t np = plan.no_pad;
+          const u128 cx = static_cast<u128>(l[0]) + ((static_cast<u128>(l[np]) + l[2 * np]) << 52) +
+                          (static_cast<u128>(l[3 * np]) << 104);
+          const i128 base = bases.empty() ? 0 : static_cast<i128>(row[bases[o]].raw) * one;
+          const u128 total = cx - (plan.csum[o] << kOffsetBits) - xs + nt_ck + static_cast<u128>(base);
+          const i128 r = fx::detail::rne_shift(static_cast<i128>(total), 60);
+          if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
+          result[o] = static_cast<std::int64_t>(r);
         }
       }
-      for (std::size_t r = 0; r < rows; ++r) {
-        fx::Q32* row = p.row(g0 + r);
-        for (std::size_t o = 0; o < no; ++o) row[outs[o]] = fx::Q32::from_raw(result[o * 8 + r]);
-      }
+      for (std::size_t o = 0; o < no; ++o) row[outs[o]] = fx::Q32::from_raw(result[o]);
     }
   });
 }

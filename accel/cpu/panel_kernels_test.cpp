@@ -68,12 +68,14 @@ TEST(CpuPanelKernels, EveryLevelGivesThePortableDotsBitForBit) {
     const PanelOps<fx::Q32> portable(n, 20, false, 48);
     const auto want_all = dots_bits(portable, p, all, block);
     const auto want_one = dots_bits(portable, p, {2}, {9});
+    const auto want_gather = dots_bits(portable, p, block, all);  // a list that is not a run of columns
     for (const Simd s : levels())
       for (const bool parallel : {false, true}) {
         SCOPED_TRACE(std::string(simd_name(s)) + (parallel ? " parallel" : " serial") + " n=" + std::to_string(n));
         const auto ops = make_panel_kernels(n, 20, parallel, 48, s);
         EXPECT_EQ(dots_bits(*ops, p, all, block), want_all);
         EXPECT_EQ(dots_bits(*ops, p, {2}, {9}), want_one);
+        EXPECT_EQ(dots_bits(*ops, p, block, all), want_gather);
       }
   }
 }

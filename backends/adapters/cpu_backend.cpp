@@ -16,8 +16,9 @@ std::unique_ptr<Backend> make_cpu_backend() {
   std::string error;
   const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
   if (!error.empty()) throw std::invalid_argument(error);
-  std::string summary = "spectral on accel/cpu kernels (TBB, exact dots ";
+  std::string summary = "spectral on accel/cpu kernels (TBB, exact SIMD ";
   summary += accel::cpu::simd_name(level);
+  summary += level == accel::cpu::Simd::kAvx512Ifma ? " dots and combinations" : level == accel::cpu::Simd::kAvx2 ? " dots" : " none";
   summary += "), focus on TBB row loops; frame, encoding, hierarchy and render the reference's (same bits)";
   return std::make_unique<StageBackend>("cpu", summary, ReferenceStages(true, false, accel::cpu::kernel_factory(level)),
                                         Domain::kFixedQ32);
