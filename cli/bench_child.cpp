@@ -74,7 +74,7 @@ Result<ChildRun> run_self(const std::vector<std::string>& args, const fs::path& 
 
   // fork, not posix_spawn or vfork: exec records the high-water mark of the memory it replaces
   // in the child's ru_maxrss. After vfork that is this process's own peak; after fork it is only
-  // what is resident now, which malloc_trim keeps to the bench's few MiB (R1-BEN-022).
+  // what is resident now, which malloc_trim keeps near r1's start-up size (R1-BEN-022).
   ::malloc_trim(0);
   ChildRun run;
   run.parent_rss_mib = anon_rss_mib();
