@@ -27,5 +27,6 @@ void add_render(CLI::App& app, Runner& selected);
 void add_golden(CLI::App& app, Runner& selected);
 void add_conform(CLI::App& app, Runner& selected);
 void add_diff(CLI::App& app, Runner& selected);
+void add_bench(CLI::App& app, Runner& selected);
 
 }  // namespace r1::cli
