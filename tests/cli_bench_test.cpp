@@ -34,7 +34,7 @@ const json& run_of(const json& report, const std::string& input, const std::stri
 
 std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
 
-// R1-BEN-010, 011, 030..034: parallel computes the reference's bits, so every file but the
+// R1-BEN-010, 011, 030..034: cpu computes the reference's bits, so every file but the
 // timings is identical, the frames are the same pixels, the verdict is AGREE and the exit 0. The
 // report's numbers hang together: epoch = the sum of the timed members, speedup = reference time
 // over backend time, one scaling point per input.
@@ -42,7 +42,7 @@ TEST(CliBench, ParallelAgreesWithTheReferenceOnTwoGeneratedGraphs) {
   r1::test::TempDir dir;
   const fs::path out = dir / "bench";
   const auto r =
-      run_cli({"bench", "--gen", "ba:150,ba:300", "--backend", "parallel", "--size", kSize, "-o", out.string()});
+      run_cli({"bench", "--gen", "ba:150,ba:300", "--backend", "cpu", "--size", kSize, "-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("bench: AGREE"), std::string::npos) << r.out;
   // The table: a header and one row per (input, backend), then the speedup table.
@@ -79,7 +79,7 @@ TEST(CliBench, ParallelAgreesWithTheReferenceOnTwoGeneratedGraphs) {
   }
   for (const char* input : {"ba-150", "ba-300"}) {
     const json& ref = run_of(j, input, "reference");
-    const json& par = run_of(j, input, "parallel");
+    const json& par = run_of(j, input, "cpu");
     EXPECT_EQ(par.at("epoch_agreement").at("method"), "bytes");
     EXPECT_TRUE(par.at("epoch_agreement").at("differing_files").empty());
     EXPECT_EQ(par.at("frame_agreement").at("mean_de2000").get<double>(), 0.0);
