@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -91,9 +92,9 @@ struct Scratch {
 
 // ---- AVX-512 IFMA inner products ---------------------------------------------------------------
 //
-// Row-major, no transposition: a vector holds 8 list columns of one row (one masked load when the
-// list is a run of columns, a gather otherwise), each lane one pair's sums against a broadcast
-// entry of a block column. Chunks of at most 2048 rows keep every lane below 2^63 (terms below
+// Row-major, no transposition: each tile's list entries are copied compact (one contiguous run
+// per row when the list is a run of columns), a vector holds 8 list columns of one row, each lane
+// one pair's sums against a broadcast entry of a block column. Chunks of at most 2048 rows keep every lane below 2^63 (terms below
 // 2^52), and the block columns' offset entries of a chunk (2048 x nw) stay in L2.
 constexpr std::size_t kChunk = 2048;
 constexpr std::size_t kMaxGroup = 8;  // block columns per pass over the chunk: 16 accumulators
@@ -101,7 +102,7 @@ constexpr std::size_t kMaxGroup = 8;  // block columns per pass over the chunk: 
 struct IfmaDots {
   std::size_t nq = 0, nq_pad = 0, nw = 0;
   bool run = false;                   // qs is a run of consecutive columns
-  std::vector<std::int32_t> qidx;     // qs, padded to nq_pad with qs[0]
+  std::vector<std::int64_t> xt;       // the tile's list entries, row-major (kTile x nq_pad)
   std::vector<std::uint64_t> wt;      // chunk rows x nw: w + 2^51
   std::vector<std::uint64_t> lo, hi;  // [c * nq_pad + q]: the pair's lane sums
   std::vector<std::uint64_t> xsum, xbits;  // per q: sum of x + 2^51, magnitude bits
@@ -113,12 +114,10 @@ struct IfmaDots {
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 template <std::size_t G>
-__attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(const Panel<fx::Q32>& p, std::size_t r0,
-                                                                      std::size_t rows, IfmaDots& d, std::size_t q0,
-                                                                      std::size_t c0, bool first) {
+__attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t rows, IfmaDots& d, std::size_t wr0,
+                                                                      std::size_t q0, std::size_t c0, bool first) {
   const std::size_t left = d.nq - q0;
   const __mmask8 mask = left >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << left) - 1);
-  const __m256i vidx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d.qidx.data() + q0));
   const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
   __m512i lo[G], hi[G];
   for (std::size_t j = 0; j < G; ++j) {
@@ -126,17 +125,14 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(const Panel<f
     hi[j] = _mm512_loadu_si512(d.hi.data() + (c0 + j) * d.nq_pad + q0);
   }
   __m512i sx = _mm512_loadu_si512(d.xsum.data() + q0), bx = _mm512_loadu_si512(d.xbits.data() + q0);
-  const std::int32_t first_col = d.qidx[q0];
   for (std::size_t r = 0; r < rows; ++r) {
-    const std::int64_t* row = &p.row(r0 + r)->raw;
-    const __m512i x = d.run ? _mm512_maskz_loadu_epi64(mask, row + first_col)
-                            : _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), mask, vidx, row, 8);
+    const __m512i x = _mm512_maskz_loadu_epi64(mask, d.xt.data() + r * d.nq_pad + q0);
     const __m512i xo = _mm512_add_epi64(x, off);
     if (first) {
       bx = _mm512_or_si512(bx, _mm512_xor_si512(x, _mm512_srai_epi64(x, 63)));
       sx = _mm512_add_epi64(sx, xo);
     }
-    const std::uint64_t* wr = d.wt.data() + r * d.nw + c0;
+    const std::uint64_t* wr = d.wt.data() + wr0 + r * d.nw + c0;
     for (std::size_t j = 0; j < G; ++j) {
       const __m512i b = _mm512_set1_epi64(static_cast<long long>(wr[j]));
       lo[j] = _mm512_madd52lo_epu64(lo[j], xo, b);
@@ -155,21 +151,39 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(const Panel<f
 
 #pragma GCC diagnostic pop
 
-void ifma_dots_chunk(const Panel<fx::Q32>& p, std::size_t r0, std::size_t rows, IfmaDots& d) {
-  for (std::size_t q0 = 0; q0 < d.nq; q0 += 8)
-    for (std::size_t c0 = 0; c0 < d.nw; c0 += kMaxGroup) {
-      const bool first = c0 == 0;
-      switch (std::min(kMaxGroup, d.nw - c0)) {
-        case 1: ifma_dots_group<1>(p, r0, rows, d, q0, c0, first); break;
-        case 2: ifma_dots_group<2>(p, r0, rows, d, q0, c0, first); break;
-        case 3: ifma_dots_group<3>(p, r0, rows, d, q0, c0, first); break;
-        case 4: ifma_dots_group<4>(p, r0, rows, d, q0, c0, first); break;
-        case 5: ifma_dots_group<5>(p, r0, rows, d, q0, c0, first); break;
-        case 6: ifma_dots_group<6>(p, r0, rows, d, q0, c0, first); break;
-        case 7: ifma_dots_group<7>(p, r0, rows, d, q0, c0, first); break;
-        default: ifma_dots_group<8>(p, r0, rows, d, q0, c0, first); break;
+// Tiles of kTile rows (about 100 KB of the widest panels, kept in L2 while every group of list
+// columns passes over them), the accumulators carried in memory between tiles.
+void ifma_dots_chunk(const Panel<fx::Q32>& p, Cols qs, std::size_t r0, std::size_t rows, IfmaDots& d) {
+  d.xt.resize(kTile * d.nq_pad);
+  for (std::size_t t0 = 0; t0 < rows; t0 += kTile) {
+    const std::size_t tr = std::min(kTile, rows - t0);
+    // The tile's list entries copied compact: one contiguous run per row when the list is a run
+    // of columns (sequential reads of the panel), else entry by entry.
+    for (std::size_t r = 0; r < tr; ++r) {
+      const fx::Q32* row = p.row(r0 + t0 + r);
+      std::int64_t* dst = d.xt.data() + r * d.nq_pad;
+      if (d.run) {
+        std::memcpy(dst, &row[qs[0]].raw, d.nq * sizeof(std::int64_t));
+      } else {
+        for (std::size_t q = 0; q < d.nq; ++q) dst[q] = row[qs[q]].raw;
       }
     }
+    const std::size_t wr = t0 * d.nw;  // the tile's first row of the block columns' entries
+    for (std::size_t q0 = 0; q0 < d.nq; q0 += 8)
+      for (std::size_t c0 = 0; c0 < d.nw; c0 += kMaxGroup) {
+        const bool first = c0 == 0;
+        switch (std::min(kMaxGroup, d.nw - c0)) {
+          case 1: ifma_dots_group<1>(tr, d, wr, q0, c0, first); break;
+          case 2: ifma_dots_group<2>(tr, d, wr, q0, c0, first); break;
+          case 3: ifma_dots_group<3>(tr, d, wr, q0, c0, first); break;
+          case 4: ifma_dots_group<4>(tr, d, wr, q0, c0, first); break;
+          case 5: ifma_dots_group<5>(tr, d, wr, q0, c0, first); break;
+          case 6: ifma_dots_group<6>(tr, d, wr, q0, c0, first); break;
+          case 7: ifma_dots_group<7>(tr, d, wr, q0, c0, first); break;
+          default: ifma_dots_group<8>(tr, d, wr, q0, c0, first); break;
+        }
+      }
+  }
 }
 
 // ---- AVX2 ------------------------------------------------------------------------------------
@@ -360,8 +374,6 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
   d.nq_pad = (nq + 7) / 8 * 8;
   d.run = true;
   for (std::size_t q = 1; q < nq; ++q) d.run = d.run && qs[q] == qs[0] + q;
-  d.qidx.assign(d.nq_pad, static_cast<std::int32_t>(qs[0]));
-  for (std::size_t q = 0; q < nq; ++q) d.qidx[q] = static_cast<std::int32_t>(qs[q]);
   for (std::size_t r0 = lo; r0 < hi; r0 += kChunk) {
     const std::size_t rows = std::min(kChunk, hi - r0);
     d.wt.resize(rows * nw);
@@ -381,7 +393,7 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
     d.hi.assign(nw * d.nq_pad, 0);
     d.xsum.assign(d.nq_pad, 0);
     d.xbits.assign(d.nq_pad, 0);
-    ifma_dots_chunk(p, r0, rows, d);
+    ifma_dots_chunk(p, qs, r0, rows, d);
     // sum x w = sum x' w' - 2^51 (sum x' + sum w') + rows 2^102, formed modulo 2^128: the true
     // value is below 2^11 2^102 in magnitude, so its i128 reading is exact.
     const u128 rows_kk = static_cast<u128>(rows) << 102;
