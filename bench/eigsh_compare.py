@@ -77,6 +77,7 @@ def main():
     ap.add_argument("--domain", default="q32", choices=["q32", "fp64"])
     ap.add_argument("--tolerance", type=float, default=1e-9)
     ap.add_argument("--parallel", action="store_true", help="r1 --parallel (bit-identical, TBB kernels)")
+    ap.add_argument("--backend", default=None, help="r1 --backend NAME (e.g. cpu: every core, SIMD kernels, same bits)")
     ap.add_argument("--check-eig", type=float, help="fail when max |lambda_r1 - lambda_eigsh| exceeds this")
     ap.add_argument("--check-angle", type=float, help="fail when the max principal angle exceeds this")
     ap.add_argument("--cut-last", action="store_true",
@@ -90,6 +91,8 @@ def main():
                "--json", "--vectors", vec, "--laplacian", mtx]
         if args.parallel:
             cmd.append("--parallel")
+        if args.backend:
+            cmd += ["--backend", args.backend]
         t0 = time.perf_counter()
         out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
         wall = time.perf_counter() - t0
