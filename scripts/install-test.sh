@@ -16,7 +16,7 @@ out=$("$work/consumer/consumer" "$root/tests/good_input/crlf_bom_header.tsv")
 expected=$'e1b19b8235443e9fac8f1d6a1203de66e9a58c53e36cbbc1f71a031c3d13ce77\n3 particles'
 if [ "$out" != "$expected" ]; then echo "consumer printed: $out" >&2; exit 1; fi
 out=$("$work/consumer/backend_consumer")
-expected=$'parallel 5/5\nnull 0/5'
+expected=$'cpu 5/5\nnull 0/5'
 if [ "$out" != "$expected" ]; then echo "backend_consumer printed: $out" >&2; exit 1; fi
 "$work/prefix/bin/r1" hash --tree - </dev/null >/dev/null
 echo "install test passed"
