@@ -275,6 +275,34 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_combine_outputs(const Co
   }
 }
 
+// A row's term entries when the terms are a run of columns: xo = x + 2^51, their sum and the OR
+// of their magnitude bits, 8 at a time.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // as above: the masked shift's pass-through
+__attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::int64_t* x, std::size_t nt, std::uint64_t* xo,
+                                                                      std::uint64_t& sum, std::uint64_t& bits) {
+  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
+  __m512i vs = _mm512_setzero_si512(), vb = _mm512_setzero_si512();
+  for (std::size_t t = 0; t < nt; t += 8) {
+    const std::size_t left = nt - t;
+    const __mmask8 mask = left >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << left) - 1);
+    const __m512i v = _mm512_maskz_loadu_epi64(mask, x + t);
+    const __m512i o = _mm512_maskz_add_epi64(mask, v, off);
+    _mm512_mask_storeu_epi64(xo + t, mask, o);
+    vs = _mm512_add_epi64(vs, o);
+    vb = _mm512_or_si512(vb, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
+  }
+  alignas(64) std::uint64_t ls[8], lb[8];
+  _mm512_store_si512(ls, vs);
+  _mm512_store_si512(lb, vb);
+  sum = bits = 0;
+  for (int k = 0; k < 8; ++k) {
+    sum += ls[k];
+    bits |= lb[k];
+  }
+}
+#pragma GCC diagnostic pop
+
 void ifma_combine_row(const CombinePlan& plan, const std::uint64_t* xo, std::uint64_t* sums) {
   std::size_t og = 0;
   for (; og + 16 <= plan.no_pad; og += 16) ifma_combine_outputs<2>(plan, xo, og, sums);
@@ -478,17 +506,23 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
     }
   const u128 nt_ck = static_cast<u128>(nt) << 114;
   const i128 one = i128{1} << 60;
+  bool run = true;
+  for (std::size_t t = 1; t < nt; ++t) run = run && terms[t] == terms[0] + t;
   spectral::for_row_blocks(size(), parallel(), [&](std::size_t lo, std::size_t hi) {
     std::vector<std::uint64_t> xo(nt), sums(4 * plan.no_pad);
     std::vector<std::int64_t> result(no);
     for (std::size_t i = lo; i < hi; ++i) {
       fx::Q32* row = p.row(i);
-      std::uint64_t xsum = 0, bits = 0;
-      for (std::size_t t = 0; t < nt; ++t) {
-        const std::int64_t v = row[terms[t]].raw;
-        xo[t] = static_cast<std::uint64_t>(v) + kOffset;
-        xsum += xo[t];  // below nt 2^52 < 2^63 whenever the bits allow the row
-        bits |= spectral::magnitude_bits(v);
+      std::uint64_t xsum = 0, bits = 0;  // the sum is below nt 2^52 < 2^63 whenever the bits allow the row
+      if (run) {
+        ifma_offset_run(&row[terms[0]].raw, nt, xo.data(), xsum, bits);
+      } else {
+        for (std::size_t t = 0; t < nt; ++t) {
+          const std::int64_t v = row[terms[t]].raw;
+          xo[t] = static_cast<std::uint64_t>(v) + kOffset;
+          xsum += xo[t];
+          bits |= spectral::magnitude_bits(v);
+        }
       }
       if ((bits >> kOffsetBits) != 0) {  // an entry beyond the offset range: the exact scalar sum
         for (std::size_t o = 0; o < no; ++o) {

@@ -105,6 +105,7 @@ TEST(CpuPanelKernels, EveryLevelGivesThePortableCombinationsBitForBit) {
         {{7}, {7}, {3}},                                                                         // one term, in range
         {{8}, {8}, {5, 4}},                                                                      // a term beyond it
         {{9, 10}, {11, 12}, {9, 10, 5}},                                                         // outputs are terms
+        {{20, 21, 22}, {20, 21, 22}, {2, 3, 4, 5, 6}},  // a run of terms holding entries beyond the range
     };
     for (std::size_t ci = 0; ci < cases.size(); ++ci) {
       const Case& k = cases[ci];
