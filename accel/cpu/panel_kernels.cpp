@@ -28,6 +28,17 @@
 
 #include "r1/solvers/exact_round.hpp"
 
+// GCC 12 reports the masked shift builtin's undefined pass-through operand as maybe-uninitialized
+// (a false positive inside avx512fintrin.h; every lane of the shift is defined). Clang has no
+// such warning group.
+#if defined(__GNUC__) && !defined(__clang__)
+#define R1_MASKED_SHIFT_WARNING_OFF _Pragma("GCC diagnostic push") _Pragma("GCC diagnostic ignored \"-Wmaybe-uninitialized\"")
+#define R1_MASKED_SHIFT_WARNING_ON _Pragma("GCC diagnostic pop")
+#else
+#define R1_MASKED_SHIFT_WARNING_OFF
+#define R1_MASKED_SHIFT_WARNING_ON
+#endif
+
 namespace r1::accel::cpu {
 
 using spectral::Cols;
@@ -109,10 +120,7 @@ struct IfmaDots {
   std::vector<std::uint64_t> wsum, wbits;  // per c
 };
 
-// GCC 12 reports the masked shift builtin's undefined pass-through operand as maybe-uninitialized
-// (a false positive inside avx512fintrin.h); the shift's every lane is defined.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+R1_MASKED_SHIFT_WARNING_OFF
 template <std::size_t G>
 __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t rows, IfmaDots& d, std::size_t wr0,
                                                                       std::size_t q0, std::size_t c0, bool first) {
@@ -149,7 +157,7 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t r
   }
 }
 
-#pragma GCC diagnostic pop
+R1_MASKED_SHIFT_WARNING_ON
 
 // Tiles of kTile rows (about 100 KB of the widest panels, kept in L2 while every group of list
 // columns passes over them), the accumulators carried in memory between tiles.
@@ -277,8 +285,7 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_combine_outputs(const Co
 
 // A row's term entries when the terms are a run of columns: xo = x + 2^51, their sum and the OR
 // of their magnitude bits, 8 at a time.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // as above: the masked shift's pass-through
+R1_MASKED_SHIFT_WARNING_OFF
 __attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::int64_t* x, std::size_t nt, std::uint64_t* xo,
                                                                       std::uint64_t& sum, std::uint64_t& bits) {
   const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
@@ -301,7 +308,7 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::in
     bits |= lb[k];
   }
 }
-#pragma GCC diagnostic pop
+R1_MASKED_SHIFT_WARNING_ON
 
 void ifma_combine_row(const CombinePlan& plan, const std::uint64_t* xo, std::uint64_t* sums) {
   std::size_t og = 0;
