@@ -180,9 +180,10 @@ TEST(Betweenness, SameBitsForAnyThreadCount) {
   const auto g = graph_of(s);
   std::vector<std::uint32_t> src(g.n);
   for (std::uint32_t i = 0; i < g.n; ++i) src[i] = g.n - 1 - i;  // any order in: sorted inside
+  const r1::BetweennessRun par{.parallel = true, .batched = true};
   std::vector<double> one, many;
-  tbb::task_arena(1).execute([&] { one = r1::betweenness_from_sources(g, src, 0.5); });
-  tbb::task_arena(4).execute([&] { many = r1::betweenness_from_sources(g, src, 0.5); });
+  tbb::task_arena(1).execute([&] { one = r1::betweenness_from_sources(g, src, 0.5, {}, par); });
+  tbb::task_arena(4).execute([&] { many = r1::betweenness_from_sources(g, src, 0.5, {}, par); });
   ASSERT_EQ(one.size(), many.size());
   EXPECT_EQ(std::memcmp(one.data(), many.data(), one.size() * sizeof(double)), 0);
   const std::uint32_t w = 300;
@@ -190,9 +191,62 @@ TEST(Betweenness, SameBitsForAnyThreadCount) {
   const auto gg = graph_of(gs);
   const std::vector<std::uint32_t> mixed{0, 1, w * w / 2, w * w - 1};
   std::vector<double> a, b;
-  tbb::task_arena(1).execute([&] { a = r1::betweenness_from_sources(gg, mixed, 1.0); });
-  tbb::task_arena(3).execute([&] { b = r1::betweenness_from_sources(gg, mixed, 1.0); });
+  tbb::task_arena(1).execute([&] { a = r1::betweenness_from_sources(gg, mixed, 1.0, {}, par); });
+  tbb::task_arena(3).execute([&] { b = r1::betweenness_from_sources(gg, mixed, 1.0, {}, par); });
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0);
+}
+
+// R1-ENC-020..021: seven sources per traversal or one at a time, serial or parallel, the same
+// bits. The graphs take every path of the batched traversal: plain batches (ba, rgg), particles
+// some lanes never reach (sbm blocks without links between them), lanes redone alone because a
+// count reaches 2^53 next to lanes that are not (the grid: its corner counts pass 2^53, its
+// centre's do not), batches deeper than 254 levels (the path), and a source given twice.
+TEST(Betweenness, BatchedAndParallelGiveTheSameBits) {
+  struct Case {
+    const char* name;
+    r1::GenParams params;
+  };
+  auto gen = [](r1::GenKind kind, std::int64_t n) {
+    r1::GenParams p;
+    p.kind = kind;
+    if (kind != r1::GenKind::kGrid) p.n = n;
+    return p;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"ba", gen(r1::GenKind::kBa, 20000)});
+  cases.back().params.m = 3;
+  cases.push_back({"sbm", gen(r1::GenKind::kSbm, 20000)});
+  cases.back().params.k = 4;
+  cases.back().params.p_in = 0.001;
+  cases.back().params.p_out = 0.0;
+  cases.push_back({"rgg", gen(r1::GenKind::kRgg, 10000)});
+  cases.back().params.radius = 0.05;
+  cases.push_back({"grid", gen(r1::GenKind::kGrid, 0)});
+  cases.back().params.dims = {40, 40};
+  cases.push_back({"path", gen(r1::GenKind::kPath, 3000)});
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const auto s = std::move(r1::generate(c.params)).value();
+    const auto g = graph_of(s);
+    // 23 pivots: three full batches and one of two; the corner and the centre for the grid.
+    std::vector<std::uint32_t> src = r1::choose_pivots(s.particles, 23);
+    src.push_back(0);
+    src.push_back(g.n / 2 + 20);
+    src.push_back(src[5]);
+    std::vector<double> plain, batched, par, par_plain;
+    plain = r1::betweenness_from_sources(g, src, 0.5, {}, {.parallel = false, .batched = false});
+    batched = r1::betweenness_from_sources(g, src, 0.5, {}, {.parallel = false, .batched = true});
+    tbb::task_arena(4).execute(
+        [&] { par = r1::betweenness_from_sources(g, src, 0.5, {}, {.parallel = true, .batched = true}); });
+    tbb::task_arena(3).execute(
+        [&] { par_plain = r1::betweenness_from_sources(g, src, 0.5, {}, {.parallel = true, .batched = false}); });
+    ASSERT_EQ(plain.size(), g.n);
+    for (const auto* other : {&batched, &par, &par_plain}) {
+      ASSERT_EQ(other->size(), plain.size());
+      EXPECT_EQ(std::memcmp(other->data(), plain.data(), plain.size() * sizeof(double)), 0);
+    }
+    EXPECT_GT(*std::max_element(plain.begin(), plain.end()), 0.0);
+  }
 }
 
 TEST(Pivots, DeterministicDistinctAndIndependentOfOrder) {

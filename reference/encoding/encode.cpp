@@ -1,6 +1,9 @@
-// The encoding stage: radius, luminosity, hue, saturation, base colour, roles and shapes, overlays (R1-ENC-001..005, R1-ENC-019, R1-ENC-030, R1-ENC-041, R1-ENC-050).
+// The encoding stage: radius, luminosity, hue, saturation, base colour, roles and shapes, overlays, serial or parallel (R1-ENC-001..005, R1-ENC-019, R1-ENC-020, R1-ENC-030, R1-ENC-041, R1-ENC-050).
 #include <algorithm>
 #include <stdexcept>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "r1/fixedpoint/elementary.hpp"
 #include "r1/fixedpoint/exact_sum.hpp"
@@ -23,6 +26,19 @@ Shape role_shape(Role r) {
     case Role::kNone: break;
   }
   return Shape::kSphere;
+}
+
+// fn(p) for every particle p in [0, n): on TBB workers when `parallel` (R1-ENC-020). Every fn
+// here writes only particle p's own outputs, so any split gives the same values.
+template <class Fn>
+void for_each_particle(std::size_t n, bool parallel, const Fn& fn) {
+  if (!parallel) {
+    for (std::size_t p = 0; p < n; ++p) fn(p);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p < r.end(); ++p) fn(p);
+  });
 }
 
 Status check_inputs(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus, const Spectrum<Q32>& spectrum) {
@@ -141,16 +157,16 @@ Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& grap
     e.color.resize(n);
     const auto& u5 = spectrum.u[3];
     const auto& u6 = spectrum.u[4];
-    for (std::size_t p = 0; p < n; ++p) {
+    for_each_particle(n, options.parallel, [&](std::size_t p) {
       e.hue[p] = hue_of(u5.empty() ? Q32{} : u5[p], u6.empty() ? Q32{} : u6[p]);
       // 6 x hue in turns is exact: the sixths form hsl_to_srgb8 takes.
       e.color[p] = hsl_to_srgb8(Q32::from_raw(6 * e.hue[p].raw), e.saturation[p], kBaseLightnessPermille);
-    }
+    });
 
     e.role.assign(n, Role::kNone);
     e.shape.assign(n, Shape::kSphere);
     if (options.role_shapes) {
-      const Betweenness b = betweenness(graph, snapshot.particles, options.betweenness, progress);
+      const Betweenness b = betweenness(graph, snapshot.particles, options.betweenness, progress, BetweennessRun{options.parallel, true});
       inf.betweenness_exact = b.exact;
       inf.betweenness_sources = b.sources;
       e.role = infer_roles(graph, b.value, &inf.roles);
@@ -171,7 +187,7 @@ Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& grap
       }
     }
     e.radius.resize(n);
-    for (std::size_t p = 0; p < n; ++p) e.radius[p] = radius_of(focus.phi[p], multiplier[p]);
+    for_each_particle(n, options.parallel, [&](std::size_t p) { e.radius[p] = radius_of(focus.phi[p], multiplier[p]); });
     if (info) *info = inf;
     return e;
   } catch (const std::exception& ex) {

@@ -6,9 +6,12 @@
 #include <boost/multiprecision/cpp_bin_float.hpp>
 #include <tbb/task_arena.h>
 
+#include <cstring>
+
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/exact_sum.hpp"
 #include "r1/reference/encoding.hpp"
+#include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_builder.hpp"
 #include "test_support.hpp"
@@ -285,7 +288,8 @@ TEST(Encode, Deterministic) {
   const auto f = focus_of(g.n);
   const auto sp = spectrum_of(g.n, 4);
   r1::EncodingOptions opt;
-  opt.betweenness.pivots = 8;  // the pivot path hashes in parallel: same result on one thread
+  opt.betweenness.pivots = 8;
+  opt.parallel = true;  // the pivots hash and the batches run on workers: same result on one thread
   auto a = r1::encode(s, g, f, sp, opt);
   r1::Result<r1::Encoding> b = r1::Status::internal("unset");
   tbb::task_arena one(1);
@@ -298,6 +302,49 @@ TEST(Encode, Deterministic) {
   EXPECT_EQ(a->role, b->role);
   EXPECT_EQ(a->shape, b->shape);
   EXPECT_EQ(a->color, b->color);
+}
+
+// R1-ENC-020: the parallel switch changes how the stage runs, not a byte of what it computes, on
+// generated graphs large enough to split (several betweenness batches, many per-particle blocks).
+TEST(Encode, ParallelGivesTheSameBytes) {
+  std::vector<r1::GenParams> graphs(3);
+  graphs[0].kind = r1::GenKind::kBa;
+  graphs[0].n = 30000;
+  graphs[0].m = 4;
+  graphs[1].kind = r1::GenKind::kSbm;
+  graphs[1].n = 20000;
+  graphs[1].k = 8;
+  graphs[1].p_in = 0.002;
+  graphs[1].p_out = 0.00002;
+  graphs[2].kind = r1::GenKind::kRgg;
+  graphs[2].n = 20000;
+  graphs[2].radius = 0.04;
+  for (const auto& gp : graphs) {
+    const auto s = std::move(r1::generate(gp)).value();
+    const auto g = std::move(r1::build_graph(s)).value();
+    SCOPED_TRACE(g.n);
+    const auto f = focus_of(g.n);
+    const auto sp = spectrum_of(g.n, 9);
+    r1::EncodingOptions serial;
+    serial.betweenness.pivots = 40;  // six batches, kept small for the test's time
+    r1::EncodingOptions par = serial;
+    par.parallel = true;
+    r1::EncodingInfo si, pi;
+    auto a = r1::encode(s, g, f, sp, serial, &si);
+    r1::Result<r1::Encoding> b = r1::Status::internal("unset");
+    tbb::task_arena(4).execute([&] { b = r1::encode(s, g, f, sp, par, &pi); });
+    ASSERT_TRUE(a.is_ok() && b.is_ok());
+    EXPECT_EQ(a->radius, b->radius);
+    EXPECT_EQ(a->luminosity, b->luminosity);
+    EXPECT_EQ(a->hue, b->hue);
+    EXPECT_EQ(a->saturation, b->saturation);
+    EXPECT_EQ(a->role, b->role);
+    EXPECT_EQ(a->shape, b->shape);
+    EXPECT_EQ(a->color, b->color);
+    EXPECT_EQ(std::memcmp(&si.roles, &pi.roles, sizeof(si.roles)), 0);
+    EXPECT_EQ(si.betweenness_sources, pi.betweenness_sources);
+    EXPECT_GT(si.roles.count[static_cast<std::size_t>(r1::Role::kBridge)] + si.roles.count[static_cast<std::size_t>(r1::Role::kHub)], 0u);
+  }
 }
 
 TEST(Encode, ChecksItsInputs) {

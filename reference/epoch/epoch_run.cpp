@@ -100,13 +100,19 @@ Result<Frame> ReferenceStages::frame(const Snapshot& s, const Spectrum<Q32>& c, 
 
 Result<Encoding> ReferenceStages::encoding(const Snapshot& s, const Graph& g, const Focus<Q32>& f, const Spectrum<Q32>& c,
                                            const EncodingOptions& o, const ProgressFn& p) {
-  return encode(s, g, f, c, o, nullptr, p);
+  if (!parallel_ || o.parallel) return encode(s, g, f, c, o, nullptr, p);
+  EncodingOptions mine = o;
+  mine.parallel = true;  // R1-ENC-020: the same bytes
+  return encode(s, g, f, c, mine, nullptr, p);
 }
 
 Result<Hierarchy> ReferenceStages::hierarchy(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi,
                                              std::span<const Color> color, std::span<const ParticleId> ids,
                                              const HierarchyOptions& o, const ProgressFn& p) {
-  return build_hierarchy(pos, phi, color, ids, o, p);
+  if (!parallel_ || o.parallel) return build_hierarchy(pos, phi, color, ids, o, p);
+  HierarchyOptions mine = o;
+  mine.parallel = true;  // R1-HIER-070: the same bytes
+  return build_hierarchy(pos, phi, color, ids, mine, p);
 }
 
 Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const ProgressFn& progress) {
@@ -155,10 +161,17 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   R1_ASSIGN(e.frame, st.frame(snapshot, e.spectrum, anchor, anchor ? o.anchor_name : std::string()));
   clock.lap(stage_name(Stage::kFrame));
 
-  R1_ASSIGN(e.encoding, st.encoding(snapshot, graph, e.focus, e.spectrum, o.encoding, progress));
+  // EpochOptions::parallel reaches the encoding and hierarchy stages through their own options
+  // (R1-ENC-020, R1-HIER-070): how they run, never what they compute.
+  EncodingOptions encoding_options = o.encoding;
+  encoding_options.parallel = o.encoding.parallel || o.parallel;
+  R1_ASSIGN(e.encoding, st.encoding(snapshot, graph, e.focus, e.spectrum, encoding_options, progress));
   clock.lap(stage_name(Stage::kEncoding));
 
-  R1_ASSIGN(e.hierarchy, st.hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, o.hierarchy, progress));
+  HierarchyOptions hierarchy_options = o.hierarchy;
+  hierarchy_options.parallel = o.hierarchy.parallel || o.parallel;
+  R1_ASSIGN(e.hierarchy,
+            st.hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, hierarchy_options, progress));
   clock.lap(stage_name(Stage::kHierarchy));
   // A stage from elsewhere must hand back data of the epoch's shape (R1-BKD-011).
   const std::size_t n = e.ids.size();

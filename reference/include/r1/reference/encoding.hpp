@@ -50,15 +50,23 @@ struct Betweenness {
   std::uint32_t sources = 0;  // BFS sources used: n when exact, k pivots otherwise
 };
 
-// The k particles with the smallest Hemera(id || "r1-pivot"), ascending particle index (R1-ENC-015).
-std::vector<std::uint32_t> choose_pivots(std::span<const ParticleId> ids, std::uint32_t k);
+// How betweenness runs, never what it computes: every combination gives the same bits
+// (R1-ENC-020..021).
+struct BetweennessRun {
+  bool parallel = false;  // batches of sources on TBB workers (R1-ENC-020)
+  bool batched = true;    // seven sources per traversal; off: one source at a time (R1-ENC-021)
+};
+
+// The k particles with the smallest Hemera(id || "r1-pivot"), ascending particle index (R1-ENC-015);
+// `parallel` spreads the hashing over TBB workers (the same digests).
+std::vector<std::uint32_t> choose_pivots(std::span<const ParticleId> ids, std::uint32_t k, bool parallel = false);
 // Sum over `sources` (ascending index) of the Brandes dependencies, times `scale` (R1-ENC-013).
 // scale = 0.5 with every particle a source gives b exactly.
 std::vector<double> betweenness_from_sources(const Graph& g, std::span<const std::uint32_t> sources, double scale,
-                                             const ProgressFn& progress = {});
+                                             const ProgressFn& progress = {}, const BetweennessRun& run = {});
 // Exact or pivot-estimated betweenness by the rule of R1-ENC-014.
 Betweenness betweenness(const Graph& g, std::span<const ParticleId> ids, const BetweennessOptions& options = {},
-                        const ProgressFn& progress = {});
+                        const ProgressFn& progress = {}, const BetweennessRun& run = {});
 // The R1-ENC-016 bound on |b_est - b| holding with probability 1 - delta per particle.
 double betweenness_error_bound(std::uint32_t n, std::uint32_t k, double delta);
 

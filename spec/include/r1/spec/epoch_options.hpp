@@ -35,12 +35,14 @@ struct EncodingOptions {
   std::string custom_name;        // names the custom overlay in messages (its file, as given)
   bool role_shapes = true;        // shapes from roles (R1-ENC-019)
   BetweennessOptions betweenness; // exact size limit and pivots (R1-ENC-014)
+  bool parallel = false;          // TBB for betweenness and the per-particle loops: bit-identical results (R1-ENC-020)
 };
 
 struct HierarchyOptions {
   // The finest clustering radius r_0 as a Q32 raw (scene units, >= 0). Unset: chosen from the data
   // by the search of R1-HIER-030..033.
   std::optional<std::int64_t> radius0_raw;
+  bool parallel = false;  // TBB for the radius search, the tree and the sorts: bit-identical results (R1-HIER-070)
 };
 
 struct EpochOptions {
