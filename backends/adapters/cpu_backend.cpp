@@ -1,8 +1,8 @@
 // The cpu backend (spec/backends.md R1-BKD-040..044): the canonical stages on every core, the
 // spectral solver on accel/cpu's kernels (exact inner products vectorised at the SIMD level the
-// CPU runs, chosen at run time or by $R1_CPU_SIMD), focus on TBB row loops; the bytes are the
-// reference's. Frame, encoding and hierarchy are the reference's stages (R1-BKD-043 says which
-// stage runs where); the frame renderer is the reference's.
+// CPU runs, chosen at run time or by $R1_CPU_SIMD), focus, encoding and hierarchy with their TBB
+// switches on; the bytes are the reference's. R1-BKD-043 says which stage runs where; the frame
+// renderer is the reference's.
 #include <stdexcept>
 #include <string>
 
@@ -19,7 +19,8 @@ std::unique_ptr<Backend> make_cpu_backend() {
   std::string summary = "spectral on accel/cpu kernels (TBB, exact SIMD ";
   summary += accel::cpu::simd_name(level);
   summary += level == accel::cpu::Simd::kAvx512Ifma ? " dots and combinations" : level == accel::cpu::Simd::kAvx2 ? " dots" : " none";
-  summary += "), focus on TBB row loops; frame, encoding, hierarchy and render the reference's (same bits)";
+  summary += "), focus on TBB row loops, encoding's batched betweenness and hierarchy with their TBB switches; "
+             "frame and render the reference's (same bits)";
   return std::make_unique<StageBackend>("cpu", summary, ReferenceStages(true, false, accel::cpu::kernel_factory(level)),
                                         Domain::kFixedQ32);
 }
