@@ -1,10 +1,13 @@
 // Leader clustering of one level and the four nested levels with canonical ids, in exact integer
-// arithmetic (R1-HIER-010..015, R1-HIER-020..022).
+// arithmetic; the nearest-neighbour shortcut and the early stop (R1-HIER-010..015,
+// R1-HIER-020..022, R1-HIER-032, R1-HIER-071).
 #include "levels.hpp"
 
 #include <algorithm>
 #include <limits>
 #include <numeric>
+
+#include <tbb/parallel_sort.h>
 
 #include "r1/fixedpoint/q32.hpp"
 
@@ -13,6 +16,22 @@ namespace r1::hier {
 namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 }  // namespace
+
+Neighbours Neighbours::of(const KdTree& tree, bool parallel) {
+  Neighbours nb;
+  nb.lower2 = tree.nearest_other_lower_bounds(parallel);
+  nb.sorted = nb.lower2;
+  if (parallel) {
+    tbb::parallel_sort(nb.sorted.begin(), nb.sorted.end());
+  } else {
+    std::sort(nb.sorted.begin(), nb.sorted.end());
+  }
+  return nb;
+}
+
+std::size_t Neighbours::alone(u128 r2) const {
+  return static_cast<std::size_t>(sorted.end() - std::upper_bound(sorted.begin(), sorted.end(), r2));
+}
 
 u128 radius2_at_level(std::int64_t radius0_raw, int level) {
   const auto r = static_cast<u128>(radius0_raw);
@@ -24,7 +43,8 @@ u128 radius2_at_level(std::int64_t radius0_raw, int level) {
   return r2;
 }
 
-Level cluster_level(const Items& items, KdTree& tree, u128 r2) {
+std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, std::uint64_t max_clusters,
+                                   std::span<const u128> lower2) {
   const auto m = static_cast<std::uint32_t>(items.size());
   tree.reset();
   // Leader clustering (R1-HIER-010, R1-HIER-011): items in canonical order; each one still
@@ -42,12 +62,19 @@ Level cluster_level(const Items& items, KdTree& tree, u128 r2) {
     members.push_back(i);
     leader_cluster[i] = c;
     tree.remove(i);
-    tree.nearest(items.pos[i], r2, kMaxChildren - 1, hits);
+    if (!lower2.empty() && lower2[i] > r2) {
+      hits.clear();  // nothing within the radius, alive or not: a cluster of one
+    } else {
+      tree.nearest_from(i, r2, kMaxChildren - 1, hits);
+    }
     for (const Hit& h : hits) {
       members.push_back(h.item);
       leader_cluster[h.item] = c;
       tree.remove(h.item);
     }
+    // Every cluster still to come takes at most kMaxChildren of the items left.
+    const std::uint64_t at_least = std::uint64_t{c} + 1 + (std::uint64_t{tree.alive_count()} + kMaxChildren - 1) / kMaxChildren;
+    if (at_least > max_clusters) return std::nullopt;
   }
   const auto clusters = static_cast<std::uint32_t>(start.size());
   start.push_back(static_cast<std::uint32_t>(members.size()));
@@ -97,22 +124,35 @@ Level cluster_level(const Items& items, KdTree& tree, u128 r2) {
 }
 
 std::optional<std::array<Level, kLevels>> cluster_levels(const Items& particles, KdTree& tree0,
-                                                         std::int64_t radius0_raw, std::uint64_t top_limit) {
+                                                         std::int64_t radius0_raw, std::uint64_t top_limit,
+                                                         const Neighbours* neighbours) {
   std::array<Level, kLevels> levels;
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const int level = static_cast<int>(l);
-    if (l == 0) {
-      levels[0] = cluster_level(particles, tree0, radius2_at_level(radius0_raw, 0));
-    } else {
-      const Items& items = levels[l - 1].clusters;
-      KdTree tree(items.pos);
-      levels[l] = cluster_level(items, tree, radius2_at_level(radius0_raw, level));
-    }
     // Each level above can shrink the count at most kMaxChildren-fold, so more than
     // top_limit * 16^(3 - l) clusters here means more than top_limit at the top.
     u128 limit = top_limit;
     for (int k = level; k < kLevels - 1; ++k) limit *= kMaxChildren;  // < 2^64 * 2^12: no wrap
-    if (levels[l].clusters.size() > limit) return std::nullopt;
+    const std::uint64_t max_clusters =
+        limit > std::numeric_limits<std::uint64_t>::max() ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(limit);
+    std::optional<Level> built;
+    if (l == 0) {
+      const u128 r2 = radius2_at_level(radius0_raw, 0);
+      if (neighbours) {
+        // The items alone are clusters of one; the others fill clusters of at most kMaxChildren.
+        const std::uint64_t alone = neighbours->alone(r2);
+        const std::uint64_t rest = particles.size() - alone;
+        if (alone + (rest + kMaxChildren - 1) / kMaxChildren > max_clusters) return std::nullopt;
+      }
+      built = cluster_level(particles, tree0, r2, max_clusters,
+                            neighbours ? std::span<const u128>(neighbours->lower2) : std::span<const u128>());
+    } else {
+      const Items& items = levels[l - 1].clusters;
+      KdTree tree(items.pos);
+      built = cluster_level(items, tree, radius2_at_level(radius0_raw, level), max_clusters);
+    }
+    if (!built) return std::nullopt;
+    levels[l] = std::move(*built);
   }
   return levels;
 }

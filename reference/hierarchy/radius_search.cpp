@@ -1,11 +1,16 @@
-// Choosing r_0 (tau_0) from the data: the target, the radius ladder and the bisection
-// (R1-HIER-030..033).
+// Choosing r_0 (tau_0) from the data: the target, the radius ladder and the bisection, serial or
+// with speculative evaluations on several workers (R1-HIER-030..033, R1-HIER-070).
 #include "radius_search.hpp"
 
 #include <algorithm>
 #include <limits>
+#include <map>
 #include <optional>
 #include <utility>
+#include <vector>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "r1/fixedpoint/q32.hpp"
 
@@ -52,42 +57,81 @@ std::int64_t ladder_radius(std::int64_t diameter, std::uint32_t j) {
   return static_cast<std::int64_t>(scaled >> shift);  // floor, R1-HIER-031
 }
 
-RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const ProgressFn& progress) {
+RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const ProgressFn& progress, bool parallel) {
   const std::uint64_t target = top_target(particles.size());
   const std::int64_t diameter = diameter_bound(particles.pos);
   // At most the final check at rho_512, nine bisection steps and one rebuild of the answer.
   constexpr std::uint64_t kMaxEvaluations = 11;
   RadiusChoice out;
-  auto evaluate = [&](std::uint32_t j) {
-    ++out.evaluations;
-    report(progress, "hierarchy", out.evaluations, kMaxEvaluations);
-    return cluster_levels(particles, tree0, ladder_radius(diameter, j), target);
+  // Results by ladder step: the levels when rho_j passes, std::nullopt when it fails.
+  std::map<std::uint32_t, std::optional<std::array<Level, kLevels>>> known;
+  // With `parallel`, each round evaluates the step the bisection needs now and the steps it
+  // needs next if that one fails (the common case while the radius is too small) and, given a
+  // third worker, if it passes; each on its own copy of tree0. Which steps are evaluated changes
+  // how long the search takes, never the path it walks or its answer.
+  const int workers = parallel ? std::clamp(tbb::this_task_arena::max_concurrency(), 1, 3) : 1;
+  const Neighbours neighbours = Neighbours::of(tree0, parallel);
+  std::vector<KdTree> trees;
+  auto evaluate = [&](std::vector<std::uint32_t> steps) {
+    if (steps.size() == 1) {
+      known[steps[0]] = cluster_levels(particles, tree0, ladder_radius(diameter, steps[0]), target, &neighbours);
+    } else {
+      while (trees.size() < steps.size() - 1) trees.push_back(tree0);
+      std::vector<std::optional<std::array<Level, kLevels>>> got(steps.size());
+      tbb::parallel_for(std::size_t{0}, steps.size(), [&](std::size_t i) {
+        KdTree& tree = i == 0 ? tree0 : trees[i - 1];
+        got[i] = cluster_levels(particles, tree, ladder_radius(diameter, steps[i]), target, &neighbours);
+      });
+      for (std::size_t i = 0; i < steps.size(); ++i) known[steps[i]] = std::move(got[i]);
+    }
+    out.evaluations += static_cast<std::uint32_t>(steps.size());
+    report(progress, "hierarchy", std::min<std::uint64_t>(out.evaluations, kMaxEvaluations - 1), kMaxEvaluations);
+  };
+  // The bisection state after rho_512 failed: the step it evaluates next, and the steps after it.
+  auto next_of = [](std::uint32_t lo, std::uint32_t hi) -> std::optional<std::uint32_t> {
+    if (hi - lo <= 1) return std::nullopt;
+    return (lo + hi) / 2;
+  };
+  auto need = [&](std::uint32_t step, std::uint32_t lo, std::uint32_t hi) {
+    if (known.count(step)) return;
+    std::vector<std::uint32_t> steps{step};
+    if (workers >= 2) {
+      // If `step` fails the search goes on in [lo, step]; if it passes, in [step, hi].
+      const auto on_fail = step == kLadderSteps ? std::optional<std::uint32_t>(kLadderSteps / 2) : next_of(lo, step);
+      if (on_fail && !known.count(*on_fail)) steps.push_back(*on_fail);
+      const auto on_pass = step == kLadderSteps ? std::nullopt : next_of(step, hi);
+      if (workers >= 3 && on_pass && !known.count(*on_pass)) steps.push_back(*on_pass);
+    }
+    evaluate(std::move(steps));
   };
 
   // R1-HIER-032: r0 = 0 when merging only coincident items already meets the target.
-  if (auto zero = evaluate(kLadderSteps)) {
+  need(kLadderSteps, 0, kLadderSteps);
+  if (known[kLadderSteps]) {
     out.radius0_raw = 0;
-    out.levels = std::move(*zero);
+    out.levels = std::move(*known[kLadderSteps]);
+    report(progress, "hierarchy", kMaxEvaluations, kMaxEvaluations);
     return out;
   }
   std::uint32_t lo = 0, hi = kLadderSteps;
-  std::optional<std::array<Level, kLevels>> lo_levels;  // the levels of rho_lo once evaluated
   while (hi - lo > 1) {
     const std::uint32_t mid = (lo + hi) / 2;
-    if (auto levels = evaluate(mid)) {
+    need(mid, lo, hi);
+    if (known[mid]) {
       lo = mid;
-      lo_levels = std::move(levels);
     } else {
       hi = mid;
     }
   }
   out.radius0_raw = ladder_radius(diameter, lo);
-  if (!lo_levels) {
+  auto found = known.find(lo);
+  if (found != known.end() && found->second) {
+    out.levels = std::move(*found->second);
+  } else {
     // rho_0 = D passes by construction (R1-HIER-031), so no limit is needed for it.
-    lo_levels = cluster_levels(particles, tree0, out.radius0_raw, std::numeric_limits<std::uint64_t>::max());
+    out.levels = std::move(*cluster_levels(particles, tree0, out.radius0_raw, std::numeric_limits<std::uint64_t>::max(), &neighbours));
     ++out.evaluations;
   }
-  out.levels = std::move(*lo_levels);
   report(progress, "hierarchy", kMaxEvaluations, kMaxEvaluations);
   return out;
 }
