@@ -570,12 +570,15 @@ TEST(HierarchyParallel, SameBytesAsSerial) {
     SCOPED_TRACE(static_cast<int>(s));
     const Layout L = make_layout(s, 30000, 17);
     const auto serial = r1::hierarchy_bytes(build_ok(L));
-    std::string par, par_forced;
+    std::string par, par2, par_forced;
+    // Four threads: three radii a round; two threads: two.
     tbb::task_arena(4).execute([&] {
       par = r1::hierarchy_bytes(build_ok(L, {.radius0_raw = std::nullopt, .parallel = true}));
       par_forced = r1::hierarchy_bytes(build_ok(L, {.radius0_raw = 3 * kUnit, .parallel = true}));
     });
+    tbb::task_arena(2).execute([&] { par2 = r1::hierarchy_bytes(build_ok(L, {.radius0_raw = std::nullopt, .parallel = true})); });
     EXPECT_EQ(serial, par);
+    EXPECT_EQ(serial, par2);
     EXPECT_EQ(r1::hierarchy_bytes(build_ok(L, {.radius0_raw = 3 * kUnit})), par_forced);
   }
 }

@@ -31,11 +31,16 @@ std::uint64_t abs_diff(std::int64_t a, std::int64_t b) {
 
 u128 square(std::uint64_t d) { return static_cast<u128>(d) * d; }
 
-}  // namespace
+// The heap's order as a function object, so that the heap operations inline it.
+constexpr auto kHitBefore = [](const Hit& a, const Hit& b) { return hit_before(a, b); };
 
-u128 distance2(const Point& a, const Point& b) {
+u128 d2_of(const Point& a, const Point& b) {
   return square(abs_diff(a[0], b[0])) + square(abs_diff(a[1], b[1])) + square(abs_diff(a[2], b[2]));
 }
+
+}  // namespace
+
+u128 distance2(const Point& a, const Point& b) { return d2_of(a, b); }
 
 namespace {
 
@@ -191,11 +196,11 @@ void KdTree::offer(u128 d2, std::uint32_t item) {
   if (heap_.size() < k_) {
     if (d2 > r2_) return;
     heap_.push_back(h);
-    std::push_heap(heap_.begin(), heap_.end(), hit_before);
+    std::push_heap(heap_.begin(), heap_.end(), kHitBefore);
   } else if (hit_before(h, heap_.front())) {
-    std::pop_heap(heap_.begin(), heap_.end(), hit_before);
+    std::pop_heap(heap_.begin(), heap_.end(), kHitBefore);
     heap_.back() = h;
-    std::push_heap(heap_.begin(), heap_.end(), hit_before);
+    std::push_heap(heap_.begin(), heap_.end(), kHitBefore);
   }
 }
 
@@ -208,7 +213,10 @@ void KdTree::search(std::uint32_t node) {
       const std::uint32_t item = perm_[j];
       if (alive_[item] != 0) {
         lowest = std::min(lowest, item);
-        offer(distance2(q_, perm_points_[j]), item);
+        const u128 d2 = d2_of(q_, perm_points_[j]);
+        // Beyond the radius, or behind the k-th best: not an answer (offer would refuse it).
+        if (d2 > (heap_.size() < k_ ? r2_ : heap_.front().d2)) continue;
+        offer(d2, item);
       }
     }
     nd.min_alive = lowest;
@@ -244,7 +252,7 @@ std::vector<u128> KdTree::nearest_other_lower_bounds(bool parallel) const {
     for (std::uint32_t j = nd.begin; j < nd.end; ++j) {
       u128 best = face_distance2(perm_points_[j], cells_[node]);
       for (std::uint32_t i = nd.begin; i < nd.end; ++i)
-        if (i != j) best = std::min(best, distance2(perm_points_[j], perm_points_[i]));
+        if (i != j) best = std::min(best, d2_of(perm_points_[j], perm_points_[i]));
       out[perm_[j]] = best;
     }
   };
@@ -276,7 +284,7 @@ void KdTree::nearest_from(std::uint32_t item, u128 r2, std::uint32_t k, std::vec
     p.min_alive = std::min(nodes_[parent + 1].min_alive, nodes_[p.right].min_alive);
     node = parent;
   }
-  std::sort_heap(heap_.begin(), heap_.end(), hit_before);
+  std::sort_heap(heap_.begin(), heap_.end(), kHitBefore);
   out.assign(heap_.begin(), heap_.end());
 }
 
@@ -288,7 +296,7 @@ void KdTree::nearest(const Point& q, u128 r2, std::uint32_t k, std::vector<Hit>&
   k_ = k;
   heap_.clear();
   if (may_hold(min_distance2(nodes_[0]), nodes_[0].min_alive)) search(0);
-  std::sort_heap(heap_.begin(), heap_.end(), hit_before);
+  std::sort_heap(heap_.begin(), heap_.end(), kHitBefore);
   out.assign(heap_.begin(), heap_.end());
 }
 

@@ -33,6 +33,26 @@ std::size_t Neighbours::alone(u128 r2) const {
   return static_cast<std::size_t>(sorted.end() - std::upper_bound(sorted.begin(), sorted.end(), r2));
 }
 
+namespace {
+
+// limit * 16^(3 - level), saturating at 2^64 - 1: more clusters than this at `level` means more
+// than `limit` at the top, since each level above shrinks the count at most kMaxChildren-fold.
+std::uint64_t level_limit(std::uint64_t top_limit, int level) {
+  u128 limit = top_limit;
+  for (int k = level; k < kLevels - 1; ++k) limit *= kMaxChildren;  // < 2^64 * 2^12: no wrap
+  return limit > std::numeric_limits<std::uint64_t>::max() ? std::numeric_limits<std::uint64_t>::max()
+                                                             : static_cast<std::uint64_t>(limit);
+}
+
+}  // namespace
+
+bool surely_fails(std::size_t items, std::int64_t radius0_raw, std::uint64_t top_limit, const Neighbours& neighbours) {
+  // The items alone are clusters of one; the others fill clusters of at most kMaxChildren.
+  const std::uint64_t alone = neighbours.alone(radius2_at_level(radius0_raw, 0));
+  const std::uint64_t rest = items - alone;
+  return alone + (rest + kMaxChildren - 1) / kMaxChildren > level_limit(top_limit, 0);
+}
+
 u128 radius2_at_level(std::int64_t radius0_raw, int level) {
   const auto r = static_cast<u128>(radius0_raw);
   u128 r2 = r * r;  // < 2^126 for r0 < 2^63
@@ -129,22 +149,11 @@ std::optional<std::array<Level, kLevels>> cluster_levels(const Items& particles,
   std::array<Level, kLevels> levels;
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const int level = static_cast<int>(l);
-    // Each level above can shrink the count at most kMaxChildren-fold, so more than
-    // top_limit * 16^(3 - l) clusters here means more than top_limit at the top.
-    u128 limit = top_limit;
-    for (int k = level; k < kLevels - 1; ++k) limit *= kMaxChildren;  // < 2^64 * 2^12: no wrap
-    const std::uint64_t max_clusters =
-        limit > std::numeric_limits<std::uint64_t>::max() ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(limit);
+    const std::uint64_t max_clusters = level_limit(top_limit, level);
     std::optional<Level> built;
     if (l == 0) {
-      const u128 r2 = radius2_at_level(radius0_raw, 0);
-      if (neighbours) {
-        // The items alone are clusters of one; the others fill clusters of at most kMaxChildren.
-        const std::uint64_t alone = neighbours->alone(r2);
-        const std::uint64_t rest = particles.size() - alone;
-        if (alone + (rest + kMaxChildren - 1) / kMaxChildren > max_clusters) return std::nullopt;
-      }
-      built = cluster_level(particles, tree0, r2, max_clusters,
+      if (neighbours && surely_fails(particles.size(), radius0_raw, top_limit, *neighbours)) return std::nullopt;
+      built = cluster_level(particles, tree0, radius2_at_level(radius0_raw, 0), max_clusters,
                             neighbours ? std::span<const u128>(neighbours->lower2) : std::span<const u128>());
     } else {
       const Items& items = levels[l - 1].clusters;

@@ -44,6 +44,10 @@ struct Neighbours {
   std::size_t alone(u128 r2) const;
 };
 
+// True when level 0 built with r_0 = radius0_raw surely has more than top_limit * 16^3 clusters
+// (the items alone, plus one per 16 of the others), so that the radius fails without a build.
+bool surely_fails(std::size_t items, std::int64_t radius0_raw, std::uint64_t top_limit, const Neighbours& neighbours);
+
 // r_L^2 = r0^2 * 10^L in Q32 raw units squared (R1-HIER-021), saturating at 2^128 - 1, which
 // exceeds every squared distance of valid positions and so means "unbounded".
 u128 radius2_at_level(std::int64_t radius0_raw, int level);

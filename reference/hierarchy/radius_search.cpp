@@ -65,16 +65,36 @@ RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const Progress
   RadiusChoice out;
   // Results by ladder step: the levels when rho_j passes, std::nullopt when it fails.
   std::map<std::uint32_t, std::optional<std::array<Level, kLevels>>> known;
-  // With `parallel`, each round evaluates the step the bisection needs now and the steps it
-  // needs next if that one fails (the common case while the radius is too small) and, given a
-  // third worker, if it passes; each on its own copy of tree0. Which steps are evaluated changes
-  // how long the search takes, never the path it walks or its answer.
-  const int workers = parallel ? std::clamp(tbb::this_task_arena::max_concurrency(), 1, 3) : 1;
   const Neighbours neighbours = Neighbours::of(tree0, parallel);
+  // A step whose level-0 bound already fails is known without a build (R1-HIER-071).
+  auto known_cheaply = [&](std::uint32_t step) {
+    if (known.count(step)) return true;
+    if (!surely_fails(particles.size(), ladder_radius(diameter, step), target, neighbours)) return false;
+    known[step] = std::nullopt;
+    return true;
+  };
+  // The step the bisection builds next in [lo, hi], given what is known: the steps known cheaply
+  // on the way are settled.
+  auto next_build = [&](std::uint32_t lo, std::uint32_t hi) -> std::optional<std::uint32_t> {
+    while (hi - lo > 1) {
+      const std::uint32_t mid = (lo + hi) / 2;
+      if (!known_cheaply(mid)) return mid;
+      (known[mid] ? lo : hi) = mid;
+    }
+    return std::nullopt;
+  };
+  // With `parallel`, each round builds the step the bisection needs now and the one it builds
+  // next if that one fails and, given a third worker, the one it builds next if it passes; each on
+  // its own copy of tree0. Which steps are built changes how long the search takes, never the path
+  // it walks or its answer.
+  const int workers = parallel ? std::clamp(tbb::this_task_arena::max_concurrency(), 1, 3) : 1;
   std::vector<KdTree> trees;
-  auto evaluate = [&](std::vector<std::uint32_t> steps) {
+  auto build = [&](std::uint32_t step, std::optional<std::uint32_t> on_fail, std::optional<std::uint32_t> on_pass) {
+    std::vector<std::uint32_t> steps{step};
+    if (workers >= 2 && on_fail) steps.push_back(*on_fail);
+    if (workers >= 3 && on_pass) steps.push_back(*on_pass);
     if (steps.size() == 1) {
-      known[steps[0]] = cluster_levels(particles, tree0, ladder_radius(diameter, steps[0]), target, &neighbours);
+      known[step] = cluster_levels(particles, tree0, ladder_radius(diameter, step), target, &neighbours);
     } else {
       while (trees.size() < steps.size() - 1) trees.push_back(tree0);
       std::vector<std::optional<std::array<Level, kLevels>>> got(steps.size());
@@ -87,26 +107,12 @@ RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const Progress
     out.evaluations += static_cast<std::uint32_t>(steps.size());
     report(progress, "hierarchy", std::min<std::uint64_t>(out.evaluations, kMaxEvaluations - 1), kMaxEvaluations);
   };
-  // The bisection state after rho_512 failed: the step it evaluates next, and the steps after it.
-  auto next_of = [](std::uint32_t lo, std::uint32_t hi) -> std::optional<std::uint32_t> {
-    if (hi - lo <= 1) return std::nullopt;
-    return (lo + hi) / 2;
-  };
-  auto need = [&](std::uint32_t step, std::uint32_t lo, std::uint32_t hi) {
-    if (known.count(step)) return;
-    std::vector<std::uint32_t> steps{step};
-    if (workers >= 2) {
-      // If `step` fails the search goes on in [lo, step]; if it passes, in [step, hi].
-      const auto on_fail = step == kLadderSteps ? std::optional<std::uint32_t>(kLadderSteps / 2) : next_of(lo, step);
-      if (on_fail && !known.count(*on_fail)) steps.push_back(*on_fail);
-      const auto on_pass = step == kLadderSteps ? std::nullopt : next_of(step, hi);
-      if (workers >= 3 && on_pass && !known.count(*on_pass)) steps.push_back(*on_pass);
-    }
-    evaluate(std::move(steps));
-  };
 
   // R1-HIER-032: r0 = 0 when merging only coincident items already meets the target.
-  need(kLadderSteps, 0, kLadderSteps);
+  if (!known_cheaply(kLadderSteps)) {
+    const auto on_fail = workers >= 2 ? next_build(0, kLadderSteps) : std::nullopt;
+    build(kLadderSteps, on_fail, std::nullopt);
+  }
   if (known[kLadderSteps]) {
     out.radius0_raw = 0;
     out.levels = std::move(*known[kLadderSteps]);
@@ -116,12 +122,12 @@ RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const Progress
   std::uint32_t lo = 0, hi = kLadderSteps;
   while (hi - lo > 1) {
     const std::uint32_t mid = (lo + hi) / 2;
-    need(mid, lo, hi);
-    if (known[mid]) {
-      lo = mid;
-    } else {
-      hi = mid;
+    if (!known_cheaply(mid)) {
+      const auto on_fail = workers >= 2 ? next_build(lo, mid) : std::nullopt;
+      const auto on_pass = workers >= 3 ? next_build(mid, hi) : std::nullopt;
+      build(mid, on_fail, on_pass);
     }
+    (known[mid] ? lo : hi) = mid;
   }
   out.radius0_raw = ladder_radius(diameter, lo);
   auto found = known.find(lo);
