@@ -286,7 +286,7 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
     if (options.radius0_raw) {
       radius0 = *options.radius0_raw;
       report(progress, "hierarchy", 0, 1);
-      auto built = hier::cluster_levels(particles, tree0, radius0, std::numeric_limits<std::uint64_t>::max());
+      auto built = hier::cluster_levels(particles, tree0, radius0, std::numeric_limits<std::uint64_t>::max(), nullptr, parallel);
       if (!built) return Status::internal("hierarchy: unbounded level build stopped early");
       levels = std::move(*built);
       report(progress, "hierarchy", 1, 1);

@@ -523,25 +523,30 @@ TEST(HierarchyRadius, SearchIsTheDocumentedBisection) {
   }
 }
 
+// Items of a layout in particle order (rank = index), as a level-0 input for cluster_level.
+r1::hier::Items items_of(const Layout& L) {
+  r1::hier::Items items;
+  for (std::size_t p = 0; p < L.pos.size(); ++p) {
+    r1::hier::Point pt{};
+    std::array<i128, 3> m{};
+    for (std::size_t d = 0; d < 3; ++d) {
+      pt[d] = L.pos[p][d].raw;
+      m[d] = static_cast<i128>(L.phi[p].raw) * L.pos[p][d].raw;
+    }
+    items.pos.push_back(pt);
+    items.phi.push_back(L.phi[p].raw);
+    items.min_id.push_back(static_cast<std::uint32_t>(p));
+    items.moment.push_back(m);
+  }
+  return items;
+}
+
 // R1-HIER-071: stopping a level early, the bound from the items alone and the search-free clusters
 // of one change no level: cluster_levels with them passes exactly when the full build's level 3
 // meets the target, and then gives the same levels.
 TEST(HierarchyRadius, EarlyStopAndShortcutsChangeNoLevel) {
   for (const Shape s : {Shape::kBlobs, Shape::kSpikes, Shape::kUniform, Shape::kStar}) {
-    const Layout L = make_layout(s, 6000, 14);
-    r1::hier::Items items;
-    for (std::size_t p = 0; p < L.pos.size(); ++p) {
-      r1::hier::Point pt{};
-      std::array<i128, 3> m{};
-      for (std::size_t d = 0; d < 3; ++d) {
-        pt[d] = L.pos[p][d].raw;
-        m[d] = static_cast<i128>(L.phi[p].raw) * L.pos[p][d].raw;
-      }
-      items.pos.push_back(pt);
-      items.phi.push_back(L.phi[p].raw);
-      items.min_id.push_back(static_cast<std::uint32_t>(p));
-      items.moment.push_back(m);
-    }
+    const r1::hier::Items items = items_of(make_layout(s, 6000, 14));
     r1::hier::KdTree tree(items.pos);
     const auto nb = r1::hier::Neighbours::of(tree, false);
     const std::int64_t D = r1::hier::diameter_bound(items.pos);
@@ -563,12 +568,40 @@ TEST(HierarchyRadius, EarlyStopAndShortcutsChangeNoLevel) {
   }
 }
 
+// R1-HIER-070: the windowed parallel leader loop (queries asked at once, checked in order, asked
+// again when an earlier leader took a member) gives the serial loop's level, with and without
+// the clusters of one, on a spread layout and on one full of coincident points.
+TEST(HierarchyParallel, LeaderLoopIsTheSerialOne) {
+  for (const Shape s : {Shape::kBlobs, Shape::kStar, Shape::kSpikes}) {
+    SCOPED_TRACE(static_cast<int>(s));
+    const r1::hier::Items items = items_of(make_layout(s, 50000, 23));
+    r1::hier::KdTree tree(items.pos);
+    const auto nb = r1::hier::Neighbours::of(tree, false);
+    const std::int64_t D = r1::hier::diameter_bound(items.pos);
+    for (const std::uint32_t j : {100u, 80u, 72u, 64u, 48u}) {
+      SCOPED_TRACE(j);
+      const u128 r2 = r1::hier::radius2_at_level(r1::hier::ladder_radius(D, j), 0);
+      const auto serial = r1::hier::cluster_level(items, tree, r2);
+      ASSERT_TRUE(serial.has_value());
+      std::optional<r1::hier::Level> par, par_alone;
+      tbb::task_arena(4).execute([&] {
+        par = r1::hier::cluster_level(items, tree, r2, std::numeric_limits<std::uint64_t>::max(), {}, true);
+        par_alone = r1::hier::cluster_level(items, tree, r2, std::numeric_limits<std::uint64_t>::max(), nb.lower2, true);
+      });
+      ASSERT_TRUE(par.has_value() && par_alone.has_value());
+      EXPECT_EQ(par->cluster_of_item, serial->cluster_of_item);
+      EXPECT_EQ(par_alone->cluster_of_item, serial->cluster_of_item);
+      EXPECT_EQ(par->clusters.pos, serial->clusters.pos);
+    }
+  }
+}
+
 // R1-HIER-070: the parallel switch changes how the stage runs, not a byte of its result, on layouts
-// large enough to split (the tree build, the sorts, the speculative radius search).
+// large enough to split (the tree build, the sorts, the leader loop, the speculative search).
 TEST(HierarchyParallel, SameBytesAsSerial) {
   for (const Shape s : {Shape::kUniform, Shape::kBlobs, Shape::kLine, Shape::kSpikes, Shape::kStar}) {
     SCOPED_TRACE(static_cast<int>(s));
-    const Layout L = make_layout(s, 30000, 17);
+    const Layout L = make_layout(s, 40000, 17);
     const auto serial = r1::hierarchy_bytes(build_ok(L));
     std::string par, par2, par_forced;
     // Four threads: three radii a round; two threads: two.

@@ -157,9 +157,19 @@ void KdTree::remove(std::uint32_t item) {
   alive_[item] = 0;
   --alive_count_;
   // A leaf's bound stays exact; the nodes above keep theirs (the removed rank is still a lower
-  // bound of what is left).
-  Node& leaf = nodes_[leaf_of_[item]];
-  if (leaf.min_alive == item) refresh_leaf(leaf);
+  // bound of what is left) unless the leaf empties: "none alive" is passed up at once, so that
+  // no search enters an empty subtree.
+  std::uint32_t node = leaf_of_[item];
+  Node& leaf = nodes_[node];
+  if (leaf.min_alive != item) return;
+  refresh_leaf(leaf);
+  while (node != 0 && nodes_[node].min_alive == kNone) {
+    node = parent_[node];
+    Node& p = nodes_[node];
+    const std::uint32_t m = std::min(nodes_[node + 1].min_alive, nodes_[p.right].min_alive);
+    if (m == p.min_alive) break;
+    p.min_alive = m;
+  }
 }
 
 u128 KdTree::box_distance2(const Point& q, const Node& n) {
@@ -185,63 +195,56 @@ u128 KdTree::face_distance2(const Point& q, const Cell& c) {
 // Every alive point below a node has d2 >= mind2 and rank >= min_rank, so (mind2, min_rank) is a
 // lower bound in (d2, rank) order: a subtree whose bound is not before the current k-th best (or
 // beyond the radius while fewer than k are held) cannot change the answer.
-bool KdTree::may_hold(u128 mind2, std::uint32_t min_rank) const {
-  if (heap_.size() < k_) return mind2 <= r2_;
-  const Hit& worst = heap_.front();
+bool KdTree::may_hold(const Query& query, u128 mind2, std::uint32_t min_rank) {
+  if (query.heap.size() < query.k) return mind2 <= query.r2;
+  const Hit& worst = query.heap.front();
   return mind2 != worst.d2 ? mind2 < worst.d2 : min_rank < worst.item;
 }
 
-void KdTree::offer(u128 d2, std::uint32_t item) {
+void KdTree::offer(Query& query, u128 d2, std::uint32_t item) {
   const Hit h{d2, item};
-  if (heap_.size() < k_) {
-    if (d2 > r2_) return;
-    heap_.push_back(h);
-    std::push_heap(heap_.begin(), heap_.end(), kHitBefore);
-  } else if (hit_before(h, heap_.front())) {
-    std::pop_heap(heap_.begin(), heap_.end(), kHitBefore);
-    heap_.back() = h;
-    std::push_heap(heap_.begin(), heap_.end(), kHitBefore);
+  std::vector<Hit>& heap = query.heap;
+  if (heap.size() < query.k) {
+    if (d2 > query.r2) return;
+    heap.push_back(h);
+    std::push_heap(heap.begin(), heap.end(), kHitBefore);
+  } else if (hit_before(h, heap.front())) {
+    std::pop_heap(heap.begin(), heap.end(), kHitBefore);
+    heap.back() = h;
+    std::push_heap(heap.begin(), heap.end(), kHitBefore);
   }
 }
 
-void KdTree::search(std::uint32_t node) {
+template <bool kTighten>
+void KdTree::search(std::uint32_t node, Query& query) {
   Node& nd = nodes_[node];
   if (nd.right == 0) {
-    // Scanning the leaf also makes its bound exact.
     std::uint32_t lowest = kNone;
     for (std::uint32_t j = nd.begin; j < nd.end; ++j) {
       const std::uint32_t item = perm_[j];
       if (alive_[item] != 0) {
         lowest = std::min(lowest, item);
-        const u128 d2 = d2_of(q_, perm_points_[j]);
+        if (item == query.skip) continue;
+        const u128 d2 = d2_of(query.q, perm_points_[j]);
         // Beyond the radius, or behind the k-th best: not an answer (offer would refuse it).
-        if (d2 > (heap_.size() < k_ ? r2_ : heap_.front().d2)) continue;
-        offer(d2, item);
+        if (d2 > query.bound()) continue;
+        offer(query, d2, item);
       }
     }
-    nd.min_alive = lowest;
+    if constexpr (kTighten) nd.min_alive = lowest;  // the scan makes the leaf's bound exact
     return;
   }
   std::uint32_t a = node + 1, b = nd.right;
-  u128 ma = min_distance2(nodes_[a]), mb = min_distance2(nodes_[b]);
+  u128 ma = box_distance2(query.q, nodes_[a]), mb = box_distance2(query.q, nodes_[b]);
   // Nearer child first (ties: the one with the lower rank bound), so the bound tightens early.
   if (mb < ma || (mb == ma && nodes_[b].min_alive < nodes_[a].min_alive)) {
     std::swap(a, b);
     std::swap(ma, mb);
   }
-  if (nodes_[a].min_alive != kNone && may_hold(ma, nodes_[a].min_alive)) search(a);
-  if (nodes_[b].min_alive != kNone && may_hold(mb, nodes_[b].min_alive)) search(b);
+  if (nodes_[a].min_alive != kNone && may_hold(query, ma, nodes_[a].min_alive)) search<kTighten>(a, query);
+  if (nodes_[b].min_alive != kNone && may_hold(query, mb, nodes_[b].min_alive)) search<kTighten>(b, query);
   // The children's bounds are lower bounds (tightened if just visited): so is their minimum.
-  nd.min_alive = std::min(nodes_[a].min_alive, nodes_[b].min_alive);
-}
-
-// Every point outside the node's subtree lies on or beyond a face of its cell, so its d2 to q
-// (inside the cell) is at least the squared distance to the nearest face. When that exceeds the
-// bound (the k-th best so far, or the radius while fewer than k are held), no outside point can
-// join the answer.
-bool KdTree::cell_holds_ball(std::uint32_t node) const {
-  const u128 bound = heap_.size() < k_ ? r2_ : heap_.front().d2;
-  return face_distance2(q_, cells_[node]) > bound;
+  if constexpr (kTighten) nd.min_alive = std::min(nodes_[a].min_alive, nodes_[b].min_alive);
 }
 
 std::vector<u128> KdTree::nearest_other_lower_bounds(bool parallel) const {
@@ -266,38 +269,48 @@ std::vector<u128> KdTree::nearest_other_lower_bounds(bool parallel) const {
   return out;
 }
 
-void KdTree::nearest_from(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out) {
-  out.clear();
-  if (k == 0 || alive_count_ == 0) return;
-  q_ = points_[item];
-  r2_ = r2;
-  k_ = k;
-  heap_.clear();
+// Every point outside a node's subtree lies on or beyond a face of its cell, so its d2 to q
+// (inside the cell) is at least the squared distance to the nearest face. When that exceeds the
+// query's bound, no outside point can join the answer, and the search from the item's leaf
+// stops going up.
+template <bool kTighten>
+void KdTree::from_leaf(std::uint32_t item, Query& query) {
   std::uint32_t node = leaf_of_[item];
-  search(node);
-  while (node != 0 && !cell_holds_ball(node)) {
+  search<kTighten>(node, query);
+  while (node != 0 && face_distance2(query.q, cells_[node]) <= query.bound()) {
     const std::uint32_t parent = parent_[node];
     Node& p = nodes_[parent];
     const std::uint32_t sibling = node == parent + 1 ? p.right : parent + 1;
     const Node& sib = nodes_[sibling];
-    if (sib.min_alive != kNone && may_hold(min_distance2(sib), sib.min_alive)) search(sibling);
-    p.min_alive = std::min(nodes_[parent + 1].min_alive, nodes_[p.right].min_alive);
+    if (sib.min_alive != kNone && may_hold(query, box_distance2(query.q, sib), sib.min_alive))
+      search<kTighten>(sibling, query);
+    if constexpr (kTighten) p.min_alive = std::min(nodes_[parent + 1].min_alive, nodes_[p.right].min_alive);
     node = parent;
   }
-  std::sort_heap(heap_.begin(), heap_.end(), kHitBefore);
-  out.assign(heap_.begin(), heap_.end());
+  std::sort_heap(query.heap.begin(), query.heap.end(), kHitBefore);
+}
+
+void KdTree::nearest_from(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out) {
+  out.clear();
+  if (k == 0 || alive_count_ == 0) return;
+  Query query{points_[item], r2, k, kNone, out};
+  from_leaf<true>(item, query);
+}
+
+void KdTree::nearest_from_readonly(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out) const {
+  out.clear();
+  if (k == 0 || alive_count_ == 0) return;
+  Query query{points_[item], r2, k, item, out};
+  // Without tightening, the search only reads the tree.
+  const_cast<KdTree*>(this)->from_leaf<false>(item, query);
 }
 
 void KdTree::nearest(const Point& q, u128 r2, std::uint32_t k, std::vector<Hit>& out) {
   out.clear();
   if (k == 0 || alive_count_ == 0) return;
-  q_ = q;
-  r2_ = r2;
-  k_ = k;
-  heap_.clear();
-  if (may_hold(min_distance2(nodes_[0]), nodes_[0].min_alive)) search(0);
-  std::sort_heap(heap_.begin(), heap_.end(), kHitBefore);
-  out.assign(heap_.begin(), heap_.end());
+  Query query{q, r2, k, kNone, out};
+  if (may_hold(query, box_distance2(q, nodes_[0]), nodes_[0].min_alive)) search<true>(0, query);
+  std::sort_heap(out.begin(), out.end(), kHitBefore);
 }
 
 }  // namespace r1::hier

@@ -48,6 +48,10 @@ class KdTree {
   // the item's leaf through ever larger subtrees, stopping once no point outside the current
   // subtree's cell can come near enough. A small radius then costs a leaf, not a descent.
   void nearest_from(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out);
+  // nearest_from's answer with `item` itself left out, computed without touching the tree: any
+  // number of these may run at once (not beside remove, reset or the other queries). Used to
+  // answer a window of leaders' queries in parallel before they are checked in order.
+  void nearest_from_readonly(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out) const;
   // For every point (by rank), a lower bound on the squared distance to its nearest other point,
   // alive or not: the least of the distances to the other points of its leaf and to its leaf's
   // cell faces (every point outside the leaf lies beyond one). One pass over the leaves, on TBB
@@ -62,7 +66,8 @@ class KdTree {
     std::uint32_t right = 0;           // right child; the left child is the next node; 0: a leaf
     // A lower bound on the lowest alive rank below, kNone (all ones) exactly when none is alive.
     // Removing a point leaves the bounds above its leaf as they were (still lower bounds, now
-    // possibly loose); a search that visits a node tightens it from its children on the way back.
+    // possibly loose) unless the leaf empties, which is passed up; a search that visits a node
+    // tightens it from its children on the way back.
     std::uint32_t min_alive = 0;
   };
 
@@ -78,13 +83,28 @@ class KdTree {
     std::uint32_t rank;
   };
 
+  // One query: the point, the radius, k, a rank to leave out (kNone: none) and the heap of the
+  // best so far (a max-heap under hit_before), which ends as the answer.
+  struct Query {
+    Point q;
+    u128 r2;
+    std::uint32_t k;
+    std::uint32_t skip;
+    std::vector<Hit>& heap;
+    // The least d2 a point must have to be refused: the radius while fewer than k are held,
+    // else the k-th best (a point at exactly that d2 may still win on rank).
+    u128 bound() const { return heap.size() < k ? r2 : heap.front().d2; }
+  };
+
   std::uint32_t build(Ranked* work, std::uint32_t self, std::uint32_t parent, const Cell& cell, std::uint32_t begin,
                       std::uint32_t end, bool parallel);
-  bool cell_holds_ball(std::uint32_t node) const;
-  void search(std::uint32_t node);
-  bool may_hold(u128 mind2, std::uint32_t min_rank) const;
-  void offer(u128 d2, std::uint32_t item);
-  u128 min_distance2(const Node& n) const { return box_distance2(q_, n); }
+  // kTighten: a search may tighten the bounds of the nodes it visits (not in read-only queries).
+  template <bool kTighten>
+  void search(std::uint32_t node, Query& query);
+  template <bool kTighten>
+  void from_leaf(std::uint32_t item, Query& query);
+  static bool may_hold(const Query& query, u128 mind2, std::uint32_t min_rank);
+  static void offer(Query& query, u128 d2, std::uint32_t item);
   static u128 box_distance2(const Point& q, const Node& n);
   static u128 face_distance2(const Point& q, const Cell& c);
   void refresh_leaf(Node& leaf);
@@ -98,12 +118,6 @@ class KdTree {
   std::vector<std::uint32_t> leaf_of_;  // rank -> leaf node
   std::vector<std::uint8_t> alive_;
   std::uint32_t alive_count_ = 0;
-
-  // Query state of nearest().
-  Point q_{};
-  u128 r2_ = 0;
-  std::uint32_t k_ = 0;
-  std::vector<Hit> heap_;  // max-heap under hit_before
 };
 
 }  // namespace r1::hier

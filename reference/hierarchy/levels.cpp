@@ -7,6 +7,8 @@
 #include <limits>
 #include <numeric>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include "r1/fixedpoint/q32.hpp"
@@ -15,6 +17,10 @@ namespace r1::hier {
 
 namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+// Parallel leader loop: items per window (more: fewer rounds, more answers asked again or
+// wasted on items an earlier leader takes), and the smallest level worth it. Speed only.
+constexpr std::size_t kWindow = 1024;
+constexpr std::uint32_t kParallelLevelMin = 1u << 15;
 }  // namespace
 
 Neighbours Neighbours::of(const KdTree& tree, bool parallel) {
@@ -64,7 +70,7 @@ u128 radius2_at_level(std::int64_t radius0_raw, int level) {
 }
 
 std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, std::uint64_t max_clusters,
-                                   std::span<const u128> lower2) {
+                                   std::span<const u128> lower2, bool parallel) {
   const auto m = static_cast<std::uint32_t>(items.size());
   tree.reset();
   // Leader clustering (R1-HIER-010, R1-HIER-011): items in canonical order; each one still
@@ -75,26 +81,66 @@ std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, st
   std::vector<std::uint32_t> members;
   members.reserve(m);
   std::vector<Hit> hits;
-  for (std::uint32_t i = 0; i < m; ++i) {
-    if (!tree.alive(i)) continue;
+  auto alone = [&](std::uint32_t i) { return !lower2.empty() && lower2[i] > r2; };
+  // Leader i with its members `found` (the answer of R1-HIER-011 for the items unassigned now);
+  // false when the level must exceed max_clusters.
+  auto lead = [&](std::uint32_t i, const std::vector<Hit>& found) {
     const auto c = static_cast<std::uint32_t>(start.size());
     start.push_back(static_cast<std::uint32_t>(members.size()));
     members.push_back(i);
     leader_cluster[i] = c;
-    tree.remove(i);
-    if (!lower2.empty() && lower2[i] > r2) {
-      hits.clear();  // nothing within the radius, alive or not: a cluster of one
-    } else {
-      tree.nearest_from(i, r2, kMaxChildren - 1, hits);
-    }
-    for (const Hit& h : hits) {
+    for (const Hit& h : found) {
       members.push_back(h.item);
       leader_cluster[h.item] = c;
       tree.remove(h.item);
     }
     // Every cluster still to come takes at most kMaxChildren of the items left.
     const std::uint64_t at_least = std::uint64_t{c} + 1 + (std::uint64_t{tree.alive_count()} + kMaxChildren - 1) / kMaxChildren;
-    if (at_least > max_clusters) return std::nullopt;
+    return at_least <= max_clusters;
+  };
+  if (!parallel || m < kParallelLevelMin) {
+    for (std::uint32_t i = 0; i < m; ++i) {
+      if (!tree.alive(i)) continue;
+      tree.remove(i);
+      if (alone(i)) {
+        hits.clear();  // nothing within the radius, alive or not: a cluster of one
+      } else {
+        tree.nearest_from(i, r2, kMaxChildren - 1, hits);
+      }
+      if (!lead(i, hits)) return std::nullopt;
+    }
+  } else {
+    // The next kWindow unassigned items are asked their queries at once on TBB workers, against
+    // the unassigned set as it stands (leaving the item itself out), then taken in canonical
+    // order as the rule says. An item already taken by an earlier leader of the window is
+    // skipped. A leader's answer A is still its answer if every item of A is still unassigned:
+    // the set only shrank since, so no item can have come before A's in (d2, rank) order, and
+    // when A is short of kMaxChildren - 1 nothing else was within the radius. Otherwise the
+    // leader asks again. Same clusters as the loop above.
+    std::vector<std::uint32_t> window;
+    std::vector<std::vector<Hit>> answers(kWindow);
+    for (std::uint32_t i = 0; i < m;) {
+      window.clear();
+      for (; i < m && window.size() < kWindow; ++i)
+        if (tree.alive(i)) window.push_back(i);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, window.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t w = r.begin(); w < r.end(); ++w) {
+          if (alone(window[w])) {
+            answers[w].clear();
+          } else {
+            tree.nearest_from_readonly(window[w], r2, kMaxChildren - 1, answers[w]);
+          }
+        }
+      });
+      for (std::size_t w = 0; w < window.size(); ++w) {
+        const std::uint32_t leader = window[w];
+        if (!tree.alive(leader)) continue;
+        tree.remove(leader);
+        const bool still = std::all_of(answers[w].begin(), answers[w].end(), [&](const Hit& h) { return tree.alive(h.item); });
+        if (!still) tree.nearest_from(leader, r2, kMaxChildren - 1, answers[w]);
+        if (!lead(leader, answers[w])) return std::nullopt;
+      }
+    }
   }
   const auto clusters = static_cast<std::uint32_t>(start.size());
   start.push_back(static_cast<std::uint32_t>(members.size()));
@@ -145,7 +191,7 @@ std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, st
 
 std::optional<std::array<Level, kLevels>> cluster_levels(const Items& particles, KdTree& tree0,
                                                          std::int64_t radius0_raw, std::uint64_t top_limit,
-                                                         const Neighbours* neighbours) {
+                                                         const Neighbours* neighbours, bool parallel) {
   std::array<Level, kLevels> levels;
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const int level = static_cast<int>(l);
@@ -154,11 +200,11 @@ std::optional<std::array<Level, kLevels>> cluster_levels(const Items& particles,
     if (l == 0) {
       if (neighbours && surely_fails(particles.size(), radius0_raw, top_limit, *neighbours)) return std::nullopt;
       built = cluster_level(particles, tree0, radius2_at_level(radius0_raw, 0), max_clusters,
-                            neighbours ? std::span<const u128>(neighbours->lower2) : std::span<const u128>());
+                            neighbours ? std::span<const u128>(neighbours->lower2) : std::span<const u128>(), parallel);
     } else {
       const Items& items = levels[l - 1].clusters;
-      KdTree tree(items.pos);
-      built = cluster_level(items, tree, radius2_at_level(radius0_raw, level), max_clusters);
+      KdTree tree(items.pos, parallel);
+      built = cluster_level(items, tree, radius2_at_level(radius0_raw, level), max_clusters, {}, parallel);
     }
     if (!built) return std::nullopt;
     levels[l] = std::move(*built);

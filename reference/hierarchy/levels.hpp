@@ -57,18 +57,19 @@ u128 radius2_at_level(std::int64_t radius0_raw, int level);
 // built over items.pos; it is reset first. Stops and returns std::nullopt as soon as the level is
 // sure to have more than max_clusters clusters (those made so far plus one per 16 items still
 // unassigned); with the default it always finishes. `lower2`, when given, holds each item's
-// Neighbours::lower2 (only a shortcut: the clusters are the same).
+// Neighbours::lower2 (only a shortcut: the clusters are the same). `parallel`: the leaders'
+// queries are asked a window at a time on TBB workers, then checked in order (R1-HIER-070).
 std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2,
                                    std::uint64_t max_clusters = std::numeric_limits<std::uint64_t>::max(),
-                                   std::span<const u128> lower2 = {});
+                                   std::span<const u128> lower2 = {}, bool parallel = false);
 
 // All kLevels levels from the particles (level 0 items) with r_0 = radius0_raw; tree0 is built
 // over particles.pos. Stops early and returns std::nullopt as soon as some level L is sure to have
 // more than top_limit * 16^(3 - L) clusters: level 3 then has more than top_limit (R1-HIER-032).
-// `neighbours` (of the particles, optional) only saves work.
+// `neighbours` (of the particles, optional) only saves work; `parallel` as for cluster_level.
 std::optional<std::array<Level, kLevels>> cluster_levels(const Items& particles, KdTree& tree0,
                                                          std::int64_t radius0_raw, std::uint64_t top_limit,
-                                                         const Neighbours* neighbours = nullptr);
+                                                         const Neighbours* neighbours = nullptr, bool parallel = false);
 
 // Clusters per level.
 std::array<std::size_t, kLevels> level_counts(const std::array<Level, kLevels>& levels);

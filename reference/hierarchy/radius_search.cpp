@@ -94,13 +94,13 @@ RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const Progress
     if (workers >= 2 && on_fail) steps.push_back(*on_fail);
     if (workers >= 3 && on_pass) steps.push_back(*on_pass);
     if (steps.size() == 1) {
-      known[step] = cluster_levels(particles, tree0, ladder_radius(diameter, step), target, &neighbours);
+      known[step] = cluster_levels(particles, tree0, ladder_radius(diameter, step), target, &neighbours, parallel);
     } else {
       while (trees.size() < steps.size() - 1) trees.push_back(tree0);
       std::vector<std::optional<std::array<Level, kLevels>>> got(steps.size());
       tbb::parallel_for(std::size_t{0}, steps.size(), [&](std::size_t i) {
         KdTree& tree = i == 0 ? tree0 : trees[i - 1];
-        got[i] = cluster_levels(particles, tree, ladder_radius(diameter, steps[i]), target, &neighbours);
+        got[i] = cluster_levels(particles, tree, ladder_radius(diameter, steps[i]), target, &neighbours, parallel);
       });
       for (std::size_t i = 0; i < steps.size(); ++i) known[steps[i]] = std::move(got[i]);
     }
@@ -135,7 +135,8 @@ RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const Progress
     out.levels = std::move(*found->second);
   } else {
     // rho_0 = D passes by construction (R1-HIER-031), so no limit is needed for it.
-    out.levels = std::move(*cluster_levels(particles, tree0, out.radius0_raw, std::numeric_limits<std::uint64_t>::max(), &neighbours));
+    out.levels = std::move(
+        *cluster_levels(particles, tree0, out.radius0_raw, std::numeric_limits<std::uint64_t>::max(), &neighbours, parallel));
     ++out.evaluations;
   }
   report(progress, "hierarchy", kMaxEvaluations, kMaxEvaluations);
