@@ -1,11 +1,14 @@
 // build_hierarchy: validation, canonical particle order, the radius choice, and the nodes with
 // their AABBs, phi sums and dominant colours (R1-HIER-001..003, R1-HIER-012, R1-HIER-022,
-// R1-HIER-033, R1-HIER-040..043, R1-HIER-060).
+// R1-HIER-033, R1-HIER-040..043, R1-HIER-060, R1-HIER-070).
 #include <algorithm>
 #include <exception>
 #include <limits>
 #include <numeric>
 #include <string>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "levels.hpp"
 #include "r1/reference/hierarchy.hpp"
@@ -54,12 +57,49 @@ Status validate(const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32>
   return Status::ok();
 }
 
+// A sort key and the particle it belongs to: sorting these moves the keys with the particles,
+// without a lookup per comparison.
+struct Keyed {
+  std::uint64_t key;
+  std::uint32_t index;
+};
+
+// Sorts v by `less`, a strict total order, so that the result is the one sorted sequence
+// whichever algorithm runs: TBB's parallel sort when `parallel` (R1-HIER-070).
+template <class T, class Less>
+void sort_total(std::vector<T>& v, const Less& less, bool parallel) {
+  if (parallel) {
+    tbb::parallel_sort(v.begin(), v.end(), less);
+  } else {
+    std::sort(v.begin(), v.end(), less);
+  }
+}
+
+// The first 8 bytes of an id as a big-endian integer: ids compare as these first (the same
+// order as the bytes), then by their remaining bytes.
+std::uint64_t id_prefix(const ParticleId& id) {
+  std::uint64_t k = 0;
+  for (std::size_t b = 0; b < 8; ++b) k = (k << 8) | id[b];
+  return k;
+}
+
 // Rank of each particle in ascending id byte order; an input error when two ids are equal.
-Result<std::vector<std::uint32_t>> id_ranks(std::span<const ParticleId> ids) {
+Result<std::vector<std::uint32_t>> id_ranks(std::span<const ParticleId> ids, bool parallel) {
   const auto n = static_cast<std::uint32_t>(ids.size());
+  std::vector<Keyed> keyed(n);
+  for (std::uint32_t i = 0; i < n; ++i) keyed[i] = {id_prefix(ids[i]), i};
+  // Equal ids (an input error) go by index, which keeps the order total.
+  sort_total(
+      keyed,
+      [&](const Keyed& a, const Keyed& b) {
+        if (a.key != b.key) return a.key < b.key;
+        const ParticleId& ia = ids[a.index];
+        const ParticleId& ib = ids[b.index];
+        return ia != ib ? ia < ib : a.index < b.index;
+      },
+      parallel);
   std::vector<std::uint32_t> by_id(n);
-  std::iota(by_id.begin(), by_id.end(), 0u);
-  std::sort(by_id.begin(), by_id.end(), [&](std::uint32_t a, std::uint32_t b) { return ids[a] < ids[b]; });
+  for (std::uint32_t r = 0; r < n; ++r) by_id[r] = keyed[r].index;
   std::vector<std::uint32_t> rank(n);
   for (std::uint32_t r = 0; r < n; ++r) {
     if (r > 0 && ids[by_id[r]] == ids[by_id[r - 1]])
@@ -122,7 +162,7 @@ u128 isqrt_rounded(u128 v) {
 
 Hierarchy assemble(const std::array<Level, kLevels>& levels, std::int64_t radius0_raw,
                    const std::vector<std::array<Q32, 3>>& pos, std::span<const Q32> phi, std::span<const Color> color,
-                   const std::vector<std::uint32_t>& rank_of) {
+                   const std::vector<std::uint32_t>& rank_of, bool parallel) {
   const auto n = static_cast<std::uint32_t>(pos.size());
   Hierarchy h;
   for (std::size_t l = 0; l < levels.size(); ++l) {
@@ -178,14 +218,19 @@ Hierarchy assemble(const std::array<Level, kLevels>& levels, std::int64_t radius
   for (ClusterNode& top : h.levels[kLevels - 1]) top.parent = kNoParent;
 
   // Colour groups: particles sorted by colour, then canonical rank (R1-HIER-042).
+  // (colour, rank) packed in one key: ranks are distinct, so the order is total.
+  std::vector<Keyed> keyed(n);
+  for (std::uint32_t p = 0; p < n; ++p) keyed[p] = {(std::uint64_t{pack(color[p])} << 32) | rank_of[p], p};
+  sort_total(keyed, [](const Keyed& a, const Keyed& b) { return a.key < b.key; }, parallel);
   std::vector<std::uint32_t> by_colour(n);
-  std::iota(by_colour.begin(), by_colour.end(), 0u);
-  std::sort(by_colour.begin(), by_colour.end(), [&](std::uint32_t a, std::uint32_t b) {
-    const std::uint32_t ka = pack(color[a]), kb = pack(color[b]);
-    return ka != kb ? ka < kb : rank_of[a] < rank_of[b];
-  });
-  for (std::size_t l = 0; l < levels.size(); ++l)
-    dominant_colours(h.levels[l], h.cluster_of[l], by_colour, color, phi, rank_of);
+  for (std::uint32_t i = 0; i < n; ++i) by_colour[i] = keyed[i].index;
+  // The levels are independent: each writes only its own nodes.
+  auto colour_level = [&](std::size_t l) { dominant_colours(h.levels[l], h.cluster_of[l], by_colour, color, phi, rank_of); };
+  if (parallel) {
+    tbb::parallel_for(std::size_t{0}, levels.size(), colour_level);
+  } else {
+    for (std::size_t l = 0; l < levels.size(); ++l) colour_level(l);
+  }
 
   for (int l = 0; l < kLevels; ++l) {
     const u128 r = isqrt_rounded(hier::radius2_at_level(radius0_raw, l));
@@ -207,14 +252,18 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
                                   const HierarchyOptions& options, const ProgressFn& progress) {
   R1_TRY(validate(pos, phi, color, ids, options));
   try {
-    R1_ASSIGN(const std::vector<std::uint32_t> id_rank, id_ranks(ids));
+    const bool parallel = options.parallel;
+    R1_ASSIGN(const std::vector<std::uint32_t> id_rank, id_ranks(ids, parallel));
     const auto n = static_cast<std::uint32_t>(pos.size());
     // Canonical particle order (R1-HIER-012): phi descending, ties by id bytes ascending.
+    // phi raws lie in (0, 2^32]: (2^32 - phi, id rank) packed in one key, distinct ranks keeping
+    // the order total.
+    std::vector<Keyed> keyed(n);
+    for (std::uint32_t p = 0; p < n; ++p)
+      keyed[p] = {(static_cast<std::uint64_t>(kPhiTotal - phi[p].raw) << 32) | id_rank[p], p};
+    sort_total(keyed, [](const Keyed& a, const Keyed& b) { return a.key < b.key; }, parallel);
     std::vector<std::uint32_t> order(n);
-    std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return phi[a].raw != phi[b].raw ? phi[a].raw > phi[b].raw : id_rank[a] < id_rank[b];
-    });
+    for (std::uint32_t r = 0; r < n; ++r) order[r] = keyed[r].index;
     std::vector<std::uint32_t> rank_of(n);
     Items particles;
     particles.pos.resize(n);
@@ -231,22 +280,22 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
         particles.moment[r][d] = static_cast<i128>(phi[p].raw) * pos[p][d].raw;  // |.| <= 2^32 * 2^60
       }
     }
-    hier::KdTree tree0(particles.pos);
+    hier::KdTree tree0(particles.pos, parallel);
     std::int64_t radius0 = 0;
     std::array<Level, kLevels> levels;
     if (options.radius0_raw) {
       radius0 = *options.radius0_raw;
       report(progress, "hierarchy", 0, 1);
-      auto built = hier::cluster_levels(particles, tree0, radius0, std::numeric_limits<std::uint64_t>::max());
+      auto built = hier::cluster_levels(particles, tree0, radius0, std::numeric_limits<std::uint64_t>::max(), nullptr, parallel);
       if (!built) return Status::internal("hierarchy: unbounded level build stopped early");
       levels = std::move(*built);
       report(progress, "hierarchy", 1, 1);
     } else {
-      hier::RadiusChoice choice = hier::choose_radius(particles, tree0, progress);
+      hier::RadiusChoice choice = hier::choose_radius(particles, tree0, progress, parallel);
       radius0 = choice.radius0_raw;
       levels = std::move(choice.levels);
     }
-    return assemble(levels, radius0, pos, phi, color, rank_of);
+    return assemble(levels, radius0, pos, phi, color, rank_of, parallel);
   } catch (const std::exception& e) {
     return Status::internal(std::string("hierarchy: ") + e.what());
   }

@@ -1,20 +1,24 @@
 // The spatial hierarchy: the k-d tree and the leader rule against brute force, nesting, caps,
 // partitions, tight AABBs, exact phi, canonical ids, colours, radii, the r_0 bisection,
-// determinism and permutation invariance, counts per level (R1-HIER-001..061).
+// determinism and permutation invariance, counts per level, the parallel switch and the fast
+// paths (R1-HIER-001..061, R1-HIER-070..071).
 #include "r1/reference/hierarchy.hpp"
 
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <boost/multiprecision/cpp_bin_float.hpp>
 #include <boost/multiprecision/cpp_int.hpp>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 
 #include "hierarchy_test_data.hpp"
 #include "kd_tree.hpp"
+#include "levels.hpp"
 #include "radius_search.hpp"
 
 namespace {
@@ -249,6 +253,69 @@ TEST(HierKdTree, CoincidentPointsComeInRankOrder) {
   EXPECT_EQ(got[14].item, 16u);
 }
 
+// R1-HIER-071: the bottom-up search is the same search; the leaf-local bounds never exceed the true
+// nearest-neighbour distance.
+RC_GTEST_PROP(HierKdTree, BottomUpSearchAndNeighbourBoundsMatchBruteForce, ()) {
+  const auto n = *rc::gen::inRange<std::uint32_t>(1, 300);
+  const auto grid = *rc::gen::inRange<std::int64_t>(1, 8);
+  const auto seed = *rc::gen::arbitrary<std::uint64_t>();
+  std::vector<r1::hier::Point> pts(n);
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::uint64_t d = 0; d < 3; ++d)
+      pts[i][d] = static_cast<std::int64_t>(r1::rng::uniform_below(seed, i, d, 2 * static_cast<std::uint64_t>(grid) + 1)) - grid;
+  r1::hier::KdTree tree(pts);
+  const auto lower = tree.nearest_other_lower_bounds(false);
+  RC_ASSERT(lower == tree.nearest_other_lower_bounds(true));
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::uint32_t j = 0; j < n; ++j)
+      if (j != i) RC_ASSERT(lower[i] <= ref_d2(pts[i], pts[j]));
+  std::vector<bool> alive(n, true);
+  std::vector<r1::hier::Hit> got;
+  for (std::uint32_t step = 0; step < n; ++step) {
+    const std::uint32_t q = static_cast<std::uint32_t>(r1::rng::uniform_below(seed, step, 30, n));
+    const u128 r2 = r1::rng::uniform_below(seed, step, 31, static_cast<std::uint64_t>(3 * grid * grid * 4 + 2));
+    const std::uint32_t k = static_cast<std::uint32_t>(r1::rng::uniform_below(seed, step, 32, 20));
+    tree.nearest_from(q, r2, k, got);
+    std::vector<std::pair<u128, std::uint32_t>> want;
+    for (std::uint32_t j = 0; j < n; ++j)
+      if (alive[j] && ref_d2(pts[q], pts[j]) <= r2) want.emplace_back(ref_d2(pts[q], pts[j]), j);
+    std::sort(want.begin(), want.end());
+    if (want.size() > k) want.resize(k);
+    RC_ASSERT(got.size() == want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) RC_ASSERT(got[i].d2 == want[i].first && got[i].item == want[i].second);
+    // Deletions in rank order, as the leaders go, and some out of order.
+    const std::uint32_t del = step % 3 == 0 ? q : step;
+    if (del < n && alive[del]) {
+      tree.remove(del);
+      alive[del] = false;
+    }
+    RC_ASSERT(tree.alive_count() == static_cast<std::uint32_t>(std::count(alive.begin(), alive.end(), true)));
+  }
+}
+
+// R1-HIER-070: a tree built in parallel answers exactly as one built on one thread.
+TEST(HierKdTree, ParallelBuildAnswersTheSame) {
+  const Layout L = make_layout(Shape::kBlobs, 40000, 8);
+  std::vector<r1::hier::Point> pts(L.pos.size());
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t d = 0; d < 3; ++d) pts[i][d] = L.pos[i][d].raw;
+  r1::hier::KdTree serial(pts);
+  std::optional<r1::hier::KdTree> par;
+  tbb::task_arena(4).execute([&] { par.emplace(pts, true); });
+  EXPECT_EQ(serial.nearest_other_lower_bounds(false), par->nearest_other_lower_bounds(true));
+  std::vector<r1::hier::Hit> a, b;
+  for (std::uint32_t i = 0; i < 3000; ++i) {
+    const auto q = static_cast<std::uint32_t>(r1::rng::uniform_below(4, i, 0, pts.size()));
+    const u128 r2 = static_cast<u128>(r1::rng::uniform_below(4, i, 1, 1u << 20)) * kUnit * kUnit / (1u << 10);
+    serial.nearest_from(q, r2, 15, a);
+    par->nearest_from(q, r2, 15, b);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) ASSERT_TRUE(a[k].d2 == b[k].d2 && a[k].item == b[k].item);
+    serial.remove(q);
+    par->remove(q);
+  }
+}
+
 // ---- the rule against brute force ------------------------------------------------------------------
 
 RC_GTEST_PROP(Hierarchy, LeaderRuleMatchesBruteForce, ()) {
@@ -453,6 +520,99 @@ TEST(HierarchyRadius, SearchIsTheDocumentedBisection) {
     const Hierarchy h = build_ok(L);
     EXPECT_EQ(h.radius_raw[0], want);
     EXPECT_LE(r1::hierarchy_counts(h)[3], T);
+  }
+}
+
+// Items of a layout in particle order (rank = index), as a level-0 input for cluster_level.
+r1::hier::Items items_of(const Layout& L) {
+  r1::hier::Items items;
+  for (std::size_t p = 0; p < L.pos.size(); ++p) {
+    r1::hier::Point pt{};
+    std::array<i128, 3> m{};
+    for (std::size_t d = 0; d < 3; ++d) {
+      pt[d] = L.pos[p][d].raw;
+      m[d] = static_cast<i128>(L.phi[p].raw) * L.pos[p][d].raw;
+    }
+    items.pos.push_back(pt);
+    items.phi.push_back(L.phi[p].raw);
+    items.min_id.push_back(static_cast<std::uint32_t>(p));
+    items.moment.push_back(m);
+  }
+  return items;
+}
+
+// R1-HIER-071: stopping a level early, the bound from the items alone and the search-free clusters
+// of one change no level: cluster_levels with them passes exactly when the full build's level 3
+// meets the target, and then gives the same levels.
+TEST(HierarchyRadius, EarlyStopAndShortcutsChangeNoLevel) {
+  for (const Shape s : {Shape::kBlobs, Shape::kSpikes, Shape::kUniform, Shape::kStar}) {
+    const r1::hier::Items items = items_of(make_layout(s, 6000, 14));
+    r1::hier::KdTree tree(items.pos);
+    const auto nb = r1::hier::Neighbours::of(tree, false);
+    const std::int64_t D = r1::hier::diameter_bound(items.pos);
+    const std::uint64_t T = r1::hier::top_target(items.size());
+    for (const std::uint32_t j : {512u, 300u, 120u, 90u, 80u, 72u, 66u, 60u, 50u, 30u, 0u}) {
+      SCOPED_TRACE(j);
+      const std::int64_t r0 = r1::hier::ladder_radius(D, j);
+      const auto full = r1::hier::cluster_levels(items, tree, r0, std::numeric_limits<std::uint64_t>::max());
+      ASSERT_TRUE(full.has_value());
+      const auto fast = r1::hier::cluster_levels(items, tree, r0, T, &nb);
+      ASSERT_EQ(fast.has_value(), (*full)[3].clusters.size() <= T);
+      if (!fast) continue;
+      for (std::size_t l = 0; l < r1::kLevels; ++l) {
+        EXPECT_EQ((*fast)[l].cluster_of_item, (*full)[l].cluster_of_item);
+        EXPECT_EQ((*fast)[l].clusters.pos, (*full)[l].clusters.pos);
+        EXPECT_EQ((*fast)[l].clusters.phi, (*full)[l].clusters.phi);
+      }
+    }
+  }
+}
+
+// R1-HIER-070: the windowed parallel leader loop (queries asked at once, checked in order, asked
+// again when an earlier leader took a member) gives the serial loop's level, with and without
+// the clusters of one, on a spread layout and on one full of coincident points.
+TEST(HierarchyParallel, LeaderLoopIsTheSerialOne) {
+  for (const Shape s : {Shape::kBlobs, Shape::kStar, Shape::kSpikes}) {
+    SCOPED_TRACE(static_cast<int>(s));
+    const r1::hier::Items items = items_of(make_layout(s, 50000, 23));
+    r1::hier::KdTree tree(items.pos);
+    const auto nb = r1::hier::Neighbours::of(tree, false);
+    const std::int64_t D = r1::hier::diameter_bound(items.pos);
+    for (const std::uint32_t j : {100u, 80u, 72u, 64u, 48u}) {
+      SCOPED_TRACE(j);
+      const u128 r2 = r1::hier::radius2_at_level(r1::hier::ladder_radius(D, j), 0);
+      const auto serial = r1::hier::cluster_level(items, tree, r2);
+      ASSERT_TRUE(serial.has_value());
+      std::optional<r1::hier::Level> par, par_alone;
+      tbb::task_arena(4).execute([&] {
+        par = r1::hier::cluster_level(items, tree, r2, std::numeric_limits<std::uint64_t>::max(), {}, true);
+        par_alone = r1::hier::cluster_level(items, tree, r2, std::numeric_limits<std::uint64_t>::max(), nb.lower2, true);
+      });
+      ASSERT_TRUE(par.has_value() && par_alone.has_value());
+      EXPECT_EQ(par->cluster_of_item, serial->cluster_of_item);
+      EXPECT_EQ(par_alone->cluster_of_item, serial->cluster_of_item);
+      EXPECT_EQ(par->clusters.pos, serial->clusters.pos);
+    }
+  }
+}
+
+// R1-HIER-070: the parallel switch changes how the stage runs, not a byte of its result, on layouts
+// large enough to split (the tree build, the sorts, the leader loop, the speculative search).
+TEST(HierarchyParallel, SameBytesAsSerial) {
+  for (const Shape s : {Shape::kUniform, Shape::kBlobs, Shape::kLine, Shape::kSpikes, Shape::kStar}) {
+    SCOPED_TRACE(static_cast<int>(s));
+    const Layout L = make_layout(s, 40000, 17);
+    const auto serial = r1::hierarchy_bytes(build_ok(L));
+    std::string par, par2, par_forced;
+    // Four threads: three radii a round; two threads: two.
+    tbb::task_arena(4).execute([&] {
+      par = r1::hierarchy_bytes(build_ok(L, {.radius0_raw = std::nullopt, .parallel = true}));
+      par_forced = r1::hierarchy_bytes(build_ok(L, {.radius0_raw = 3 * kUnit, .parallel = true}));
+    });
+    tbb::task_arena(2).execute([&] { par2 = r1::hierarchy_bytes(build_ok(L, {.radius0_raw = std::nullopt, .parallel = true})); });
+    EXPECT_EQ(serial, par);
+    EXPECT_EQ(serial, par2);
+    EXPECT_EQ(r1::hierarchy_bytes(build_ok(L, {.radius0_raw = 3 * kUnit})), par_forced);
   }
 }
 

@@ -1,18 +1,27 @@
 // A static k-d tree over integer points with deletion: the k nearest alive points within a squared
-// radius, nearest first, ties by rank; exact integer distances (R1-HIER-010, R1-HIER-011).
+// radius, nearest first, ties by rank; exact integer distances; searched bottom-up from a point's leaf
+// (R1-HIER-010, R1-HIER-011, R1-HIER-070..071).
 #include "kd_tree.hpp"
 
 #include <algorithm>
 #include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 namespace r1::hier {
 
 namespace {
 
 // Leaves hold at most this many points: small enough that a leaf scan is cheap, large enough
-// that the tree has few nodes (about 2n / 8). It shapes only the search, never its answer.
-constexpr std::uint32_t kLeafSize = 8;
+// that the tree has few nodes (about 2n / 16). It shapes only the search, never its answer.
+constexpr std::uint32_t kLeafSize = 16;
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+// Cell faces that no split made. Valid coordinates have |c| <= 2^60 (R1-HIER-003), so these never
+// equal a real split value.
+constexpr std::int64_t kOpenLo = std::numeric_limits<std::int64_t>::min();
+constexpr std::int64_t kOpenHi = std::numeric_limits<std::int64_t>::max();
 
 std::uint64_t abs_diff(std::int64_t a, std::int64_t b) {
   // |a - b| < 2^63 for |a|, |b| < 2^62; formed in unsigned arithmetic so no signed overflow.
@@ -22,168 +31,286 @@ std::uint64_t abs_diff(std::int64_t a, std::int64_t b) {
 
 u128 square(std::uint64_t d) { return static_cast<u128>(d) * d; }
 
-}  // namespace
+// The heap's order as a function object, so that the heap operations inline it.
+constexpr auto kHitBefore = [](const Hit& a, const Hit& b) { return hit_before(a, b); };
 
-u128 distance2(const Point& a, const Point& b) {
+u128 d2_of(const Point& a, const Point& b) {
   return square(abs_diff(a[0], b[0])) + square(abs_diff(a[1], b[1])) + square(abs_diff(a[2], b[2]));
 }
 
-KdTree::KdTree(std::span<const Point> points) : points_(points.begin(), points.end()) {
+}  // namespace
+
+u128 distance2(const Point& a, const Point& b) { return d2_of(a, b); }
+
+namespace {
+
+// Nodes of a subtree over m points: a leaf, or a node and its halves floor(m / 2), ceil(m / 2).
+// Sizes at one depth take at most two values, so the recursion is short.
+std::uint32_t subtree_nodes(std::uint32_t m) {
+  if (m <= kLeafSize) return 1;
+  return 1 + subtree_nodes(m / 2) + subtree_nodes(m - m / 2);
+}
+
+// Below this many points a subtree is built on the calling thread (task overhead, not results).
+constexpr std::uint32_t kParallelBuildMin = 1u << 14;
+
+}  // namespace
+
+KdTree::KdTree(std::span<const Point> points, bool parallel) : points_(points.begin(), points.end()) {
   const auto n = static_cast<std::uint32_t>(points_.size());
-  perm_.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) perm_[i] = i;
   leaf_of_.assign(n, 0);
   alive_.assign(n, 1);
   if (n == 0) return;
-  nodes_.reserve(2 * (n / kLeafSize + 1));
-  build(0, n, 0);  // the root is node 0
+  const std::uint32_t count = subtree_nodes(n);
+  nodes_.resize(count);
+  cells_.resize(count);
+  parent_.resize(count);
+  std::vector<Ranked> work(n);
+  for (std::uint32_t i = 0; i < n; ++i) work[i] = {points_[i], i};
+  Cell everything;
+  everything.lo.fill(kOpenLo);
+  everything.hi.fill(kOpenHi);
+  build(work.data(), 0, 0, everything, 0, n, parallel);  // the root is node 0
+  perm_.resize(n);
   perm_points_.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) perm_points_[i] = points_[perm_[i]];
+  for (std::uint32_t i = 0; i < n; ++i) {
+    perm_[i] = work[i].rank;
+    perm_points_[i] = work[i].p;
+  }
   reset();
 }
 
-// Builds the subtree over perm_[begin, end) and returns its node index (children come after
-// their parent, which reset() relies on).
-std::uint32_t KdTree::build(std::uint32_t begin, std::uint32_t end, std::uint32_t parent) {
-  const auto self = static_cast<std::uint32_t>(nodes_.size());
-  nodes_.emplace_back();
+// Builds the subtree over work[begin, end) as node `self` and the nodes after it in preorder:
+// the left child is self + 1, the right one follows the left subtree (children come after their
+// parent, which reset() relies on). Node numbers depend only on subtree sizes, so the halves can
+// be built at once.
+std::uint32_t KdTree::build(Ranked* work, std::uint32_t self, std::uint32_t parent, const Cell& cell,
+                            std::uint32_t begin, std::uint32_t end, bool parallel) {
   Node node;
   node.begin = begin;
   node.end = end;
-  node.parent = parent;
-  node.lo = node.hi = points_[perm_[begin]];
+  cells_[self] = cell;
+  parent_[self] = parent;
+  // The bounding box of the points.
+  node.lo = node.hi = work[begin].p;
   for (std::uint32_t i = begin + 1; i < end; ++i) {
-    const Point& p = points_[perm_[i]];
+    const Point& p = work[i].p;
     for (std::size_t d = 0; d < 3; ++d) {
       node.lo[d] = std::min(node.lo[d], p[d]);
       node.hi[d] = std::max(node.hi[d], p[d]);
     }
   }
   if (end - begin <= kLeafSize) {
-    for (std::uint32_t i = begin; i < end; ++i) leaf_of_[perm_[i]] = self;
+    for (std::uint32_t i = begin; i < end; ++i) leaf_of_[work[i].rank] = self;
     nodes_[self] = node;
     return self;
   }
-  // Split the widest dimension (ties: the lowest) at the median of (coordinate, rank): a strict
-  // total order, so the halves are the same sets on every machine even when coordinates repeat.
+  // Split the widest dimension of the points (ties: the lowest) at the median of (coordinate,
+  // rank): a strict total order, so the halves are the same sets on every machine even when
+  // coordinates repeat.
   std::size_t dim = 0;
   for (std::size_t d = 1; d < 3; ++d)
     if (abs_diff(node.hi[d], node.lo[d]) > abs_diff(node.hi[dim], node.lo[dim])) dim = d;
   const std::uint32_t mid = begin + (end - begin) / 2;
-  std::nth_element(perm_.begin() + begin, perm_.begin() + mid, perm_.begin() + end,
-                   [&](std::uint32_t a, std::uint32_t b) {
-                     const std::int64_t ca = points_[a][dim], cb = points_[b][dim];
-                     return ca != cb ? ca < cb : a < b;
-                   });
-  node.left = build(begin, mid, self);
-  node.right = build(mid, end, self);
+  std::nth_element(work + begin, work + mid, work + end, [dim](const Ranked& a, const Ranked& b) {
+    return a.p[dim] != b.p[dim] ? a.p[dim] < b.p[dim] : a.rank < b.rank;
+  });
+  const std::uint32_t left = self + 1;
+  node.right = left + subtree_nodes(mid - begin);
+  // The points before mid have coordinate <= the median's, those from mid on >= it.
+  const std::int64_t split = work[mid].p[dim];
+  Cell left_cell = cell, right_cell = cell;
+  left_cell.hi[dim] = split;
+  right_cell.lo[dim] = split;
+  if (parallel && end - begin >= kParallelBuildMin) {
+    tbb::parallel_invoke([&] { build(work, left, self, left_cell, begin, mid, true); },
+                         [&] { build(work, node.right, self, right_cell, mid, end, true); });
+  } else {
+    build(work, left, self, left_cell, begin, mid, parallel);
+    build(work, node.right, self, right_cell, mid, end, parallel);
+  }
   nodes_[self] = node;
   return self;
 }
 
 void KdTree::reset() {
   std::fill(alive_.begin(), alive_.end(), std::uint8_t{1});
+  alive_count_ = static_cast<std::uint32_t>(alive_.size());
   // Children have larger indices than their parent, so one backward sweep sees them first.
   for (std::size_t i = nodes_.size(); i-- > 0;) {
     Node& nd = nodes_[i];
-    if (nd.left == 0) {
-      nd.alive = nd.end - nd.begin;
-      nd.min_alive = kNone;
-      for (std::uint32_t j = nd.begin; j < nd.end; ++j) nd.min_alive = std::min(nd.min_alive, perm_[j]);
+    if (nd.right == 0) {
+      refresh_leaf(nd);
     } else {
-      nd.alive = nodes_[nd.left].alive + nodes_[nd.right].alive;
-      nd.min_alive = std::min(nodes_[nd.left].min_alive, nodes_[nd.right].min_alive);
+      nd.min_alive = std::min(nodes_[i + 1].min_alive, nodes_[nd.right].min_alive);
     }
   }
 }
 
-void KdTree::recompute_min(std::uint32_t node) {
-  Node& nd = nodes_[node];
-  nd.min_alive = kNone;
-  for (std::uint32_t j = nd.begin; j < nd.end; ++j)
-    if (alive_[perm_[j]] != 0) nd.min_alive = std::min(nd.min_alive, perm_[j]);
+void KdTree::refresh_leaf(Node& leaf) {
+  leaf.min_alive = kNone;
+  for (std::uint32_t j = leaf.begin; j < leaf.end; ++j)
+    if (alive_[perm_[j]] != 0) leaf.min_alive = std::min(leaf.min_alive, perm_[j]);
 }
 
 void KdTree::remove(std::uint32_t item) {
   alive_[item] = 0;
+  --alive_count_;
+  // A leaf's bound stays exact; the nodes above keep theirs (the removed rank is still a lower
+  // bound of what is left) unless the leaf empties: "none alive" is passed up at once, so that
+  // no search enters an empty subtree.
   std::uint32_t node = leaf_of_[item];
-  for (std::uint32_t n = node;; n = nodes_[n].parent) {
-    --nodes_[n].alive;
-    if (n == 0) break;
-  }
-  if (nodes_[node].min_alive != item) return;  // the lowest alive rank is unchanged everywhere
-  recompute_min(node);
-  while (node != 0) {
-    const std::uint32_t parent = nodes_[node].parent;
-    Node& p = nodes_[parent];
-    const std::uint32_t m = std::min(nodes_[p.left].min_alive, nodes_[p.right].min_alive);
+  Node& leaf = nodes_[node];
+  if (leaf.min_alive != item) return;
+  refresh_leaf(leaf);
+  while (node != 0 && nodes_[node].min_alive == kNone) {
+    node = parent_[node];
+    Node& p = nodes_[node];
+    const std::uint32_t m = std::min(nodes_[node + 1].min_alive, nodes_[p.right].min_alive);
     if (m == p.min_alive) break;
     p.min_alive = m;
-    node = parent;
   }
 }
 
-u128 KdTree::min_distance2(const Node& n) const {
+u128 KdTree::box_distance2(const Point& q, const Node& n) {
   u128 s = 0;
   for (std::size_t d = 0; d < 3; ++d) {
-    if (q_[d] < n.lo[d]) s += square(abs_diff(n.lo[d], q_[d]));
-    else if (q_[d] > n.hi[d]) s += square(abs_diff(q_[d], n.hi[d]));
+    if (q[d] < n.lo[d]) s += square(abs_diff(n.lo[d], q[d]));
+    else if (q[d] > n.hi[d]) s += square(abs_diff(q[d], n.hi[d]));
   }
   return s;
+}
+
+// The least squared distance from q (inside the cell) to a face of the cell: every point outside
+// the node's subtree is at least this far from q. u128 max for a cell without faces (the root).
+u128 KdTree::face_distance2(const Point& q, const Cell& c) {
+  u128 m = u128_max;
+  for (std::size_t d = 0; d < 3; ++d) {
+    if (c.lo[d] != kOpenLo) m = std::min(m, square(abs_diff(q[d], c.lo[d])));
+    if (c.hi[d] != kOpenHi) m = std::min(m, square(abs_diff(c.hi[d], q[d])));
+  }
+  return m;
 }
 
 // Every alive point below a node has d2 >= mind2 and rank >= min_rank, so (mind2, min_rank) is a
 // lower bound in (d2, rank) order: a subtree whose bound is not before the current k-th best (or
 // beyond the radius while fewer than k are held) cannot change the answer.
-bool KdTree::may_hold(u128 mind2, std::uint32_t min_rank) const {
-  if (heap_.size() < k_) return mind2 <= r2_;
-  const Hit& worst = heap_.front();
+bool KdTree::may_hold(const Query& query, u128 mind2, std::uint32_t min_rank) {
+  if (query.heap.size() < query.k) return mind2 <= query.r2;
+  const Hit& worst = query.heap.front();
   return mind2 != worst.d2 ? mind2 < worst.d2 : min_rank < worst.item;
 }
 
-void KdTree::offer(u128 d2, std::uint32_t item) {
+void KdTree::offer(Query& query, u128 d2, std::uint32_t item) {
   const Hit h{d2, item};
-  if (heap_.size() < k_) {
-    if (d2 > r2_) return;
-    heap_.push_back(h);
-    std::push_heap(heap_.begin(), heap_.end(), hit_before);
-  } else if (hit_before(h, heap_.front())) {
-    std::pop_heap(heap_.begin(), heap_.end(), hit_before);
-    heap_.back() = h;
-    std::push_heap(heap_.begin(), heap_.end(), hit_before);
+  std::vector<Hit>& heap = query.heap;
+  if (heap.size() < query.k) {
+    if (d2 > query.r2) return;
+    heap.push_back(h);
+    std::push_heap(heap.begin(), heap.end(), kHitBefore);
+  } else if (hit_before(h, heap.front())) {
+    std::pop_heap(heap.begin(), heap.end(), kHitBefore);
+    heap.back() = h;
+    std::push_heap(heap.begin(), heap.end(), kHitBefore);
   }
 }
 
-void KdTree::search(std::uint32_t node) {
-  const Node& nd = nodes_[node];
-  if (nd.left == 0) {
+template <bool kTighten>
+void KdTree::search(std::uint32_t node, Query& query) {
+  Node& nd = nodes_[node];
+  if (nd.right == 0) {
+    std::uint32_t lowest = kNone;
     for (std::uint32_t j = nd.begin; j < nd.end; ++j) {
       const std::uint32_t item = perm_[j];
-      if (alive_[item] != 0) offer(distance2(q_, perm_points_[j]), item);
+      if (alive_[item] != 0) {
+        lowest = std::min(lowest, item);
+        if (item == query.skip) continue;
+        const u128 d2 = d2_of(query.q, perm_points_[j]);
+        // Beyond the radius, or behind the k-th best: not an answer (offer would refuse it).
+        if (d2 > query.bound()) continue;
+        offer(query, d2, item);
+      }
     }
+    if constexpr (kTighten) nd.min_alive = lowest;  // the scan makes the leaf's bound exact
     return;
   }
-  std::uint32_t a = nd.left, b = nd.right;
-  u128 ma = min_distance2(nodes_[a]), mb = min_distance2(nodes_[b]);
-  // Nearer child first (ties: the one holding the lower rank), so the bound tightens early.
+  std::uint32_t a = node + 1, b = nd.right;
+  u128 ma = box_distance2(query.q, nodes_[a]), mb = box_distance2(query.q, nodes_[b]);
+  // Nearer child first (ties: the one with the lower rank bound), so the bound tightens early.
   if (mb < ma || (mb == ma && nodes_[b].min_alive < nodes_[a].min_alive)) {
     std::swap(a, b);
     std::swap(ma, mb);
   }
-  if (nodes_[a].alive != 0 && may_hold(ma, nodes_[a].min_alive)) search(a);
-  if (nodes_[b].alive != 0 && may_hold(mb, nodes_[b].min_alive)) search(b);
+  if (nodes_[a].min_alive != kNone && may_hold(query, ma, nodes_[a].min_alive)) search<kTighten>(a, query);
+  if (nodes_[b].min_alive != kNone && may_hold(query, mb, nodes_[b].min_alive)) search<kTighten>(b, query);
+  // The children's bounds are lower bounds (tightened if just visited): so is their minimum.
+  if constexpr (kTighten) nd.min_alive = std::min(nodes_[a].min_alive, nodes_[b].min_alive);
+}
+
+std::vector<u128> KdTree::nearest_other_lower_bounds(bool parallel) const {
+  std::vector<u128> out(points_.size());
+  auto leaf = [&](std::size_t node) {
+    const Node& nd = nodes_[node];
+    if (nd.right != 0) return;
+    for (std::uint32_t j = nd.begin; j < nd.end; ++j) {
+      u128 best = face_distance2(perm_points_[j], cells_[node]);
+      for (std::uint32_t i = nd.begin; i < nd.end; ++i)
+        if (i != j) best = std::min(best, d2_of(perm_points_[j], perm_points_[i]));
+      out[perm_[j]] = best;
+    }
+  };
+  if (parallel) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodes_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t node = r.begin(); node < r.end(); ++node) leaf(node);
+    });
+  } else {
+    for (std::size_t node = 0; node < nodes_.size(); ++node) leaf(node);
+  }
+  return out;
+}
+
+// Every point outside a node's subtree lies on or beyond a face of its cell, so its d2 to q
+// (inside the cell) is at least the squared distance to the nearest face. When that exceeds the
+// query's bound, no outside point can join the answer, and the search from the item's leaf
+// stops going up.
+template <bool kTighten>
+void KdTree::from_leaf(std::uint32_t item, Query& query) {
+  std::uint32_t node = leaf_of_[item];
+  search<kTighten>(node, query);
+  while (node != 0 && face_distance2(query.q, cells_[node]) <= query.bound()) {
+    const std::uint32_t parent = parent_[node];
+    Node& p = nodes_[parent];
+    const std::uint32_t sibling = node == parent + 1 ? p.right : parent + 1;
+    const Node& sib = nodes_[sibling];
+    if (sib.min_alive != kNone && may_hold(query, box_distance2(query.q, sib), sib.min_alive))
+      search<kTighten>(sibling, query);
+    if constexpr (kTighten) p.min_alive = std::min(nodes_[parent + 1].min_alive, nodes_[p.right].min_alive);
+    node = parent;
+  }
+  std::sort_heap(query.heap.begin(), query.heap.end(), kHitBefore);
+}
+
+void KdTree::nearest_from(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out) {
+  out.clear();
+  if (k == 0 || alive_count_ == 0) return;
+  Query query{points_[item], r2, k, kNone, out};
+  from_leaf<true>(item, query);
+}
+
+void KdTree::nearest_from_readonly(std::uint32_t item, u128 r2, std::uint32_t k, std::vector<Hit>& out) const {
+  out.clear();
+  if (k == 0 || alive_count_ == 0) return;
+  Query query{points_[item], r2, k, item, out};
+  // Without tightening, the search only reads the tree.
+  const_cast<KdTree*>(this)->from_leaf<false>(item, query);
 }
 
 void KdTree::nearest(const Point& q, u128 r2, std::uint32_t k, std::vector<Hit>& out) {
   out.clear();
-  if (k == 0 || nodes_.empty() || nodes_[0].alive == 0) return;
-  q_ = q;
-  r2_ = r2;
-  k_ = k;
-  heap_.clear();
-  if (may_hold(min_distance2(nodes_[0]), nodes_[0].min_alive)) search(0);
-  std::sort_heap(heap_.begin(), heap_.end(), hit_before);
-  out.assign(heap_.begin(), heap_.end());
+  if (k == 0 || alive_count_ == 0) return;
+  Query query{q, r2, k, kNone, out};
+  if (may_hold(query, box_distance2(q, nodes_[0]), nodes_[0].min_alive)) search<true>(0, query);
+  std::sort_heap(out.begin(), out.end(), kHitBefore);
 }
 
 }  // namespace r1::hier

@@ -1,10 +1,15 @@
 // Leader clustering of one level and the four nested levels with canonical ids, in exact integer
-// arithmetic (R1-HIER-010..015, R1-HIER-020..022).
+// arithmetic; the nearest-neighbour shortcut and the early stop (R1-HIER-010..015,
+// R1-HIER-020..022, R1-HIER-032, R1-HIER-071).
 #include "levels.hpp"
 
 #include <algorithm>
 #include <limits>
 #include <numeric>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "r1/fixedpoint/q32.hpp"
 
@@ -12,7 +17,47 @@ namespace r1::hier {
 
 namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+// Parallel leader loop: items per window (more: fewer rounds, more answers asked again or
+// wasted on items an earlier leader takes), and the smallest level worth it. Speed only.
+constexpr std::size_t kWindow = 1024;
+constexpr std::uint32_t kParallelLevelMin = 1u << 15;
 }  // namespace
+
+Neighbours Neighbours::of(const KdTree& tree, bool parallel) {
+  Neighbours nb;
+  nb.lower2 = tree.nearest_other_lower_bounds(parallel);
+  nb.sorted = nb.lower2;
+  if (parallel) {
+    tbb::parallel_sort(nb.sorted.begin(), nb.sorted.end());
+  } else {
+    std::sort(nb.sorted.begin(), nb.sorted.end());
+  }
+  return nb;
+}
+
+std::size_t Neighbours::alone(u128 r2) const {
+  return static_cast<std::size_t>(sorted.end() - std::upper_bound(sorted.begin(), sorted.end(), r2));
+}
+
+namespace {
+
+// limit * 16^(3 - level), saturating at 2^64 - 1: more clusters than this at `level` means more
+// than `limit` at the top, since each level above shrinks the count at most kMaxChildren-fold.
+std::uint64_t level_limit(std::uint64_t top_limit, int level) {
+  u128 limit = top_limit;
+  for (int k = level; k < kLevels - 1; ++k) limit *= kMaxChildren;  // < 2^64 * 2^12: no wrap
+  return limit > std::numeric_limits<std::uint64_t>::max() ? std::numeric_limits<std::uint64_t>::max()
+                                                             : static_cast<std::uint64_t>(limit);
+}
+
+}  // namespace
+
+bool surely_fails(std::size_t items, std::int64_t radius0_raw, std::uint64_t top_limit, const Neighbours& neighbours) {
+  // The items alone are clusters of one; the others fill clusters of at most kMaxChildren.
+  const std::uint64_t alone = neighbours.alone(radius2_at_level(radius0_raw, 0));
+  const std::uint64_t rest = items - alone;
+  return alone + (rest + kMaxChildren - 1) / kMaxChildren > level_limit(top_limit, 0);
+}
 
 u128 radius2_at_level(std::int64_t radius0_raw, int level) {
   const auto r = static_cast<u128>(radius0_raw);
@@ -24,7 +69,8 @@ u128 radius2_at_level(std::int64_t radius0_raw, int level) {
   return r2;
 }
 
-Level cluster_level(const Items& items, KdTree& tree, u128 r2) {
+std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, std::uint64_t max_clusters,
+                                   std::span<const u128> lower2, bool parallel) {
   const auto m = static_cast<std::uint32_t>(items.size());
   tree.reset();
   // Leader clustering (R1-HIER-010, R1-HIER-011): items in canonical order; each one still
@@ -35,18 +81,65 @@ Level cluster_level(const Items& items, KdTree& tree, u128 r2) {
   std::vector<std::uint32_t> members;
   members.reserve(m);
   std::vector<Hit> hits;
-  for (std::uint32_t i = 0; i < m; ++i) {
-    if (!tree.alive(i)) continue;
+  auto alone = [&](std::uint32_t i) { return !lower2.empty() && lower2[i] > r2; };
+  // Leader i with its members `found` (the answer of R1-HIER-011 for the items unassigned now);
+  // false when the level must exceed max_clusters.
+  auto lead = [&](std::uint32_t i, const std::vector<Hit>& found) {
     const auto c = static_cast<std::uint32_t>(start.size());
     start.push_back(static_cast<std::uint32_t>(members.size()));
     members.push_back(i);
     leader_cluster[i] = c;
-    tree.remove(i);
-    tree.nearest(items.pos[i], r2, kMaxChildren - 1, hits);
-    for (const Hit& h : hits) {
+    for (const Hit& h : found) {
       members.push_back(h.item);
       leader_cluster[h.item] = c;
       tree.remove(h.item);
+    }
+    // Every cluster still to come takes at most kMaxChildren of the items left.
+    const std::uint64_t at_least = std::uint64_t{c} + 1 + (std::uint64_t{tree.alive_count()} + kMaxChildren - 1) / kMaxChildren;
+    return at_least <= max_clusters;
+  };
+  if (!parallel || m < kParallelLevelMin) {
+    for (std::uint32_t i = 0; i < m; ++i) {
+      if (!tree.alive(i)) continue;
+      tree.remove(i);
+      if (alone(i)) {
+        hits.clear();  // nothing within the radius, alive or not: a cluster of one
+      } else {
+        tree.nearest_from(i, r2, kMaxChildren - 1, hits);
+      }
+      if (!lead(i, hits)) return std::nullopt;
+    }
+  } else {
+    // The next kWindow unassigned items are asked their queries at once on TBB workers, against
+    // the unassigned set as it stands (leaving the item itself out), then taken in canonical
+    // order as the rule says. An item already taken by an earlier leader of the window is
+    // skipped. A leader's answer A is still its answer if every item of A is still unassigned:
+    // the set only shrank since, so no item can have come before A's in (d2, rank) order, and
+    // when A is short of kMaxChildren - 1 nothing else was within the radius. Otherwise the
+    // leader asks again. Same clusters as the loop above.
+    std::vector<std::uint32_t> window;
+    std::vector<std::vector<Hit>> answers(kWindow);
+    for (std::uint32_t i = 0; i < m;) {
+      window.clear();
+      for (; i < m && window.size() < kWindow; ++i)
+        if (tree.alive(i)) window.push_back(i);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, window.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t w = r.begin(); w < r.end(); ++w) {
+          if (alone(window[w])) {
+            answers[w].clear();
+          } else {
+            tree.nearest_from_readonly(window[w], r2, kMaxChildren - 1, answers[w]);
+          }
+        }
+      });
+      for (std::size_t w = 0; w < window.size(); ++w) {
+        const std::uint32_t leader = window[w];
+        if (!tree.alive(leader)) continue;
+        tree.remove(leader);
+        const bool still = std::all_of(answers[w].begin(), answers[w].end(), [&](const Hit& h) { return tree.alive(h.item); });
+        if (!still) tree.nearest_from(leader, r2, kMaxChildren - 1, answers[w]);
+        if (!lead(leader, answers[w])) return std::nullopt;
+      }
     }
   }
   const auto clusters = static_cast<std::uint32_t>(start.size());
@@ -97,22 +190,24 @@ Level cluster_level(const Items& items, KdTree& tree, u128 r2) {
 }
 
 std::optional<std::array<Level, kLevels>> cluster_levels(const Items& particles, KdTree& tree0,
-                                                         std::int64_t radius0_raw, std::uint64_t top_limit) {
+                                                         std::int64_t radius0_raw, std::uint64_t top_limit,
+                                                         const Neighbours* neighbours, bool parallel) {
   std::array<Level, kLevels> levels;
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const int level = static_cast<int>(l);
+    const std::uint64_t max_clusters = level_limit(top_limit, level);
+    std::optional<Level> built;
     if (l == 0) {
-      levels[0] = cluster_level(particles, tree0, radius2_at_level(radius0_raw, 0));
+      if (neighbours && surely_fails(particles.size(), radius0_raw, top_limit, *neighbours)) return std::nullopt;
+      built = cluster_level(particles, tree0, radius2_at_level(radius0_raw, 0), max_clusters,
+                            neighbours ? std::span<const u128>(neighbours->lower2) : std::span<const u128>(), parallel);
     } else {
       const Items& items = levels[l - 1].clusters;
-      KdTree tree(items.pos);
-      levels[l] = cluster_level(items, tree, radius2_at_level(radius0_raw, level));
+      KdTree tree(items.pos, parallel);
+      built = cluster_level(items, tree, radius2_at_level(radius0_raw, level), max_clusters, {}, parallel);
     }
-    // Each level above can shrink the count at most kMaxChildren-fold, so more than
-    // top_limit * 16^(3 - l) clusters here means more than top_limit at the top.
-    u128 limit = top_limit;
-    for (int k = level; k < kLevels - 1; ++k) limit *= kMaxChildren;  // < 2^64 * 2^12: no wrap
-    if (levels[l].clusters.size() > limit) return std::nullopt;
+    if (!built) return std::nullopt;
+    levels[l] = std::move(*built);
   }
   return levels;
 }

@@ -26,10 +26,13 @@ std::int64_t ladder_radius(std::int64_t diameter, std::uint32_t j);
 struct RadiusChoice {
   std::int64_t radius0_raw = 0;
   std::array<Level, kLevels> levels;  // built with radius0_raw
-  std::uint32_t evaluations = 0;      // radii tried (including the final one when it was not cached)
+  std::uint32_t evaluations = 0;      // radii evaluated (the final one included when it was not cached;
+                                      // with `parallel`, speculative ones too)
 };
 
-// The bisection of R1-HIER-032 over `particles` (tree0 built over their positions).
-RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const ProgressFn& progress);
+// The bisection of R1-HIER-032 over `particles` (tree0 built over their positions). With
+// `parallel`, radii the bisection may ask for next are evaluated beside the one it asks for now,
+// on TBB workers; it then walks the same path to the same radius (R1-HIER-070).
+RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const ProgressFn& progress, bool parallel = false);
 
 }  // namespace r1::hier
