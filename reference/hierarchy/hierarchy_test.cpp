@@ -208,14 +208,33 @@ Layout tie_layout(std::size_t n, std::uint64_t seed, std::int64_t grid) {
 
 // ---- k-d tree ------------------------------------------------------------------------------------
 
-RC_GTEST_PROP(HierKdTree, NearestMatchesBruteForceUnderDeletion, ()) {
-  const auto n = *rc::gen::inRange<std::uint32_t>(1, 200);
-  const auto grid = *rc::gen::inRange<std::int64_t>(1, 6);
-  const auto seed = *rc::gen::arbitrary<std::uint64_t>();
+// n points with integer coordinates in [-grid, grid]^3 (coincident points likely on small grids).
+std::vector<r1::hier::Point> grid_points(std::uint32_t n, std::int64_t grid, std::uint64_t seed) {
   std::vector<r1::hier::Point> pts(n);
   for (std::uint32_t i = 0; i < n; ++i)
     for (std::uint64_t d = 0; d < 3; ++d)
       pts[i][d] = static_cast<std::int64_t>(r1::rng::uniform_below(seed, i, d, 2 * static_cast<std::uint64_t>(grid) + 1)) - grid;
+  return pts;
+}
+
+// The k nearest alive points within squared distance r2 of point q by brute force, ties by index:
+// what a tree search must have returned in `got` (inside a RapidCheck property).
+void expect_brute_force_nearest(const std::vector<r1::hier::Point>& pts, const std::vector<bool>& alive, std::uint32_t q,
+                                u128 r2, std::uint32_t k, const std::vector<r1::hier::Hit>& got) {
+  std::vector<std::pair<u128, std::uint32_t>> want;
+  for (std::uint32_t j = 0; j < pts.size(); ++j)
+    if (alive[j] && ref_d2(pts[q], pts[j]) <= r2) want.emplace_back(ref_d2(pts[q], pts[j]), j);
+  std::sort(want.begin(), want.end());
+  if (want.size() > k) want.resize(k);
+  RC_ASSERT(got.size() == want.size());
+  for (std::size_t i = 0; i < got.size(); ++i) RC_ASSERT(got[i].d2 == want[i].first && got[i].item == want[i].second);
+}
+
+RC_GTEST_PROP(HierKdTree, NearestMatchesBruteForceUnderDeletion, ()) {
+  const auto n = *rc::gen::inRange<std::uint32_t>(1, 200);
+  const auto grid = *rc::gen::inRange<std::int64_t>(1, 6);
+  const auto seed = *rc::gen::arbitrary<std::uint64_t>();
+  const std::vector<r1::hier::Point> pts = grid_points(n, grid, seed);
   r1::hier::KdTree tree(pts);
   std::vector<bool> alive(n, true);
   std::vector<r1::hier::Hit> got;
@@ -224,13 +243,7 @@ RC_GTEST_PROP(HierKdTree, NearestMatchesBruteForceUnderDeletion, ()) {
     const u128 r2 = r1::rng::uniform_below(seed, step, 21, static_cast<std::uint64_t>(3 * grid * grid * 4 + 2));
     const std::uint32_t k = static_cast<std::uint32_t>(r1::rng::uniform_below(seed, step, 22, 20));
     tree.nearest(pts[q], r2, k, got);
-    std::vector<std::pair<u128, std::uint32_t>> want;
-    for (std::uint32_t j = 0; j < n; ++j)
-      if (alive[j] && ref_d2(pts[q], pts[j]) <= r2) want.emplace_back(ref_d2(pts[q], pts[j]), j);
-    std::sort(want.begin(), want.end());
-    if (want.size() > k) want.resize(k);
-    RC_ASSERT(got.size() == want.size());
-    for (std::size_t i = 0; i < got.size(); ++i) RC_ASSERT(got[i].d2 == want[i].first && got[i].item == want[i].second);
+    expect_brute_force_nearest(pts, alive, q, r2, k, got);
     if (alive[q]) {
       tree.remove(q);
       alive[q] = false;
@@ -259,10 +272,7 @@ RC_GTEST_PROP(HierKdTree, BottomUpSearchAndNeighbourBoundsMatchBruteForce, ()) {
   const auto n = *rc::gen::inRange<std::uint32_t>(1, 300);
   const auto grid = *rc::gen::inRange<std::int64_t>(1, 8);
   const auto seed = *rc::gen::arbitrary<std::uint64_t>();
-  std::vector<r1::hier::Point> pts(n);
-  for (std::uint32_t i = 0; i < n; ++i)
-    for (std::uint64_t d = 0; d < 3; ++d)
-      pts[i][d] = static_cast<std::int64_t>(r1::rng::uniform_below(seed, i, d, 2 * static_cast<std::uint64_t>(grid) + 1)) - grid;
+  const std::vector<r1::hier::Point> pts = grid_points(n, grid, seed);
   r1::hier::KdTree tree(pts);
   const auto lower = tree.nearest_other_lower_bounds(false);
   RC_ASSERT(lower == tree.nearest_other_lower_bounds(true));
@@ -276,13 +286,7 @@ RC_GTEST_PROP(HierKdTree, BottomUpSearchAndNeighbourBoundsMatchBruteForce, ()) {
     const u128 r2 = r1::rng::uniform_below(seed, step, 31, static_cast<std::uint64_t>(3 * grid * grid * 4 + 2));
     const std::uint32_t k = static_cast<std::uint32_t>(r1::rng::uniform_below(seed, step, 32, 20));
     tree.nearest_from(q, r2, k, got);
-    std::vector<std::pair<u128, std::uint32_t>> want;
-    for (std::uint32_t j = 0; j < n; ++j)
-      if (alive[j] && ref_d2(pts[q], pts[j]) <= r2) want.emplace_back(ref_d2(pts[q], pts[j]), j);
-    std::sort(want.begin(), want.end());
-    if (want.size() > k) want.resize(k);
-    RC_ASSERT(got.size() == want.size());
-    for (std::size_t i = 0; i < got.size(); ++i) RC_ASSERT(got[i].d2 == want[i].first && got[i].item == want[i].second);
+    expect_brute_force_nearest(pts, alive, q, r2, k, got);
     // Deletions in rank order, as the leaders go, and some out of order.
     const std::uint32_t del = step % 3 == 0 ? q : step;
     if (del < n && alive[del]) {
