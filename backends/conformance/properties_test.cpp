@@ -67,7 +67,7 @@ TEST(ConformanceProperties, ReferencePassesAllQuietly) {
   EXPECT_EQ(err, "");
 }
 
-TEST(ConformanceProperties, ParallelPassesAll) {
+TEST(ConformanceProperties, CpuPassesAll) {
   auto b = make("cpu");
   ASSERT_TRUE(b);
   const auto results = conformance::check_backend(*b);
