@@ -2,18 +2,21 @@
 // AVX-512 IFMA or AVX2 and combinations with AVX-512 IFMA, chosen at run time, beside the portable
 // path; the other kernels are the solver's own on TBB tasks.
 //
-// The vector paths compute the same exact sum as the portable one by another grouping. A row
-// block's entries are offset to x' = x + 2^51, which lies in [0, 2^52) whenever |x| < 2^51 (the
-// block's magnitude bits say so; otherwise the pair falls back to the exact product-by-product
-// sum). Then sum x w = sum x' w' - 2^51 (sum x + sum w) - rows 2^102, every term an integer:
-//   * AVX-512 IFMA multiplies 52-bit lanes and adds the low and the high 52 bits of each product
-//     into separate 64-bit lanes: sum x' w' = LO + 2^52 HI. A lane takes at most 4096 / 8 = 512
-//     terms below 2^52, so it stays below 2^61 and never wraps.
-//   * AVX2 splits x' = a 2^26 + b (a, b < 2^26) and multiplies 32-bit halves:
-//     x' w' = ac 2^52 + (ad + bc) 2^26 + bd. A lane takes at most 4096 / 4 = 1024 rows, so the
+// The vector paths compute the same exact sums as the portable kernels by another grouping.
+// Entries are offset to x' = x + 2^51, which lies in [0, 2^52) whenever |x| < 2^51 (magnitude
+// bits say so; otherwise the pair, or the row of a combination, takes the exact product-by-product
+// sum). Then sum x w = sum x' w' - 2^51 (sum x' + sum w') + rows 2^102, every term an integer,
+// formed modulo 2^128 and read as i128 (the true value is far inside its range):
+//   * IFMA inner products: a lane per (list column, block column) pair accumulates the low and
+//     the high 52 bits of x' w' (sum x' w' = LO + 2^52 HI) over a chunk of at most 2048 rows, so
+//     no lane passes 2^63.
+//   * AVX2 inner products: x' = a 2^26 + b (a, b < 2^26), x' w' = ac 2^52 + (ad + bc) 2^26 + bd,
+//     lanes over rows of transposed tiles; a lane takes at most 4096 / 4 = 1024 rows, so the
 //     middle sum stays below 2^63 and the others below 2^62.
-// The totals then enter the same spectral::FastExact as the portable kernel's, so the rounded
-// double of every inner product is the portable one's bit for bit (tests: panel_kernels_test).
+//   * IFMA combinations: see CombinePlan below (coefficients offset by 2^63, two limbs).
+// The totals enter the same spectral::FastExact and the same one rounding as the portable
+// kernels', so every inner product and every combined entry is the portable one's bit for bit
+// (tests: panel_kernels_test).
 #include "r1/accel/cpu/panel_kernels.hpp"
 
 #include <immintrin.h>
@@ -88,15 +91,15 @@ Simd chosen_simd(std::string* error) {
 
 namespace {
 
-constexpr std::size_t kTile = 64;                        // rows per transposed tile (a multiple of 8)
+constexpr std::size_t kTile = 64;                        // rows per tile (a multiple of 8)
 constexpr int kOffsetBits = 51;                          // |x| < 2^51 takes the vector path
 constexpr std::uint64_t kOffset = std::uint64_t{1} << kOffsetBits;
 static_assert(spectral::kBlock <= 4096, "the lane bounds above assume row blocks of at most 4096");
 
-// The scratch of one row block: the tile's offset columns and, per pair, the lane sums.
+// The AVX2 scratch of one row block: the tile's offset columns and, per pair, the lane sums.
 struct Scratch {
-  std::vector<std::uint64_t> x, w;  // column-major tiles: column q at x + q * kTile (AVX2: two halves)
-  std::vector<std::uint64_t> lanes; // per pair: 8 (IFMA: LO, HI x 8 lanes ... see kernels) u64
+  std::vector<std::uint64_t> x, w;  // column-major tiles, two halves per column: column q at x + 2 q kTile
+  std::vector<std::uint64_t> lanes; // per pair: AC[4], MID[4], BD[4]
   std::vector<i128> sx, sw;         // sum of the raw entries per column over the block
   std::vector<std::uint64_t> qbits, wbits;
 };
@@ -105,8 +108,9 @@ struct Scratch {
 //
 // Row-major, no transposition: each tile's list entries are copied compact (one contiguous run
 // per row when the list is a run of columns), a vector holds 8 list columns of one row, each lane
-// one pair's sums against a broadcast entry of a block column. Chunks of at most 2048 rows keep every lane below 2^63 (terms below
-// 2^52), and the block columns' offset entries of a chunk (2048 x nw) stay in L2.
+// one pair's sums against a broadcast entry of a block column. Chunks of at most 2048 rows keep
+// every lane below 2^63 (terms below 2^52), and the block columns' offset entries of a chunk
+// (2048 x nw) stay in L2.
 constexpr std::size_t kChunk = 2048;
 constexpr std::size_t kMaxGroup = 8;  // block columns per pass over the chunk: 16 accumulators
 
@@ -434,7 +438,7 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
     const u128 rows_kk = static_cast<u128>(rows) << 102;
     for (std::size_t q = 0; q < nq; ++q)
       for (std::size_t c = 0; c < nw; ++c) {
-        std::size_t k = q * nw + c;
+        const std::size_t k = q * nw + c;
         if (((d.xbits[q] | d.wbits[c]) >> kOffsetBits) == 0) {
           const std::size_t l = c * d.nq_pad + q;
           const u128 t = static_cast<u128>(d.lo[l]) + (static_cast<u128>(d.hi[l]) << 52) -
