@@ -7,6 +7,7 @@
 #include <numeric>
 #include <string>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -270,7 +271,7 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
     particles.phi.resize(n);
     particles.min_id.resize(n);
     particles.moment.resize(n);
-    for (std::uint32_t r = 0; r < n; ++r) {
+    auto fill = [&](std::uint32_t r) {  // writes rank r's entries only
       const std::uint32_t p = order[r];
       rank_of[p] = r;
       particles.phi[r] = phi[p].raw;
@@ -279,6 +280,13 @@ Result<Hierarchy> build_hierarchy(const std::vector<std::array<Q32, 3>>& pos, st
         particles.pos[r][d] = pos[p][d].raw;
         particles.moment[r][d] = static_cast<i128>(phi[p].raw) * pos[p][d].raw;  // |.| <= 2^32 * 2^60
       }
+    };
+    if (parallel) {
+      tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 4096), [&](const tbb::blocked_range<std::uint32_t>& rr) {
+        for (std::uint32_t r = rr.begin(); r < rr.end(); ++r) fill(r);
+      });
+    } else {
+      for (std::uint32_t r = 0; r < n; ++r) fill(r);
     }
     hier::KdTree tree0(particles.pos, parallel);
     std::int64_t radius0 = 0;

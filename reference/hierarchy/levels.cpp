@@ -145,38 +145,54 @@ std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, st
   const auto clusters = static_cast<std::uint32_t>(start.size());
   start.push_back(static_cast<std::uint32_t>(members.size()));
 
+  // Per cluster (or item) work below writes only its own entries: on TBB workers when
+  // `parallel`, the same values either way.
+  auto for_each = [&](std::uint32_t count, const auto& fn) {
+    if (!parallel || count < kParallelLevelMin) {
+      for (std::uint32_t c = 0; c < count; ++c) fn(c);
+      return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, count, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+      for (std::uint32_t c = r.begin(); c < r.end(); ++c) fn(c);
+    });
+  };
+
   // Aggregates in leader order: exact sums, the lowest member id.
   std::vector<std::int64_t> phi(clusters, 0);
   std::vector<std::uint32_t> min_id(clusters, kNone);
   std::vector<std::array<i128, 3>> moment(clusters, std::array<i128, 3>{});
-  for (std::uint32_t c = 0; c < clusters; ++c) {
+  for_each(clusters, [&](std::uint32_t c) {
     for (std::uint32_t k = start[c]; k < start[c + 1]; ++k) {
       const std::uint32_t i = members[k];
       phi[c] += items.phi[i];  // every phi sum is at most the total, 2^32
       min_id[c] = std::min(min_id[c], items.min_id[i]);
       for (std::size_t d = 0; d < 3; ++d) moment[c][d] += items.moment[i][d];  // |sum| <= 2^32 * 2^62
     }
-  }
+  });
 
   // Canonical ids (R1-HIER-013, R-1.0 10.2): phi sum descending, ties by the lowest member id.
-  // Member sets are disjoint and ids distinct, so the order is total.
+  // Member sets are disjoint and ids distinct, so the order is total (one sorted result for
+  // either sort).
   std::vector<std::uint32_t> order(clusters);
   std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return phi[a] != phi[b] ? phi[a] > phi[b] : min_id[a] < min_id[b];
-  });
+  auto canonical = [&](std::uint32_t a, std::uint32_t b) { return phi[a] != phi[b] ? phi[a] > phi[b] : min_id[a] < min_id[b]; };
+  if (parallel && clusters >= kParallelLevelMin) {
+    tbb::parallel_sort(order.begin(), order.end(), canonical);
+  } else {
+    std::sort(order.begin(), order.end(), canonical);
+  }
   std::vector<std::uint32_t> canon(clusters);
   for (std::uint32_t id = 0; id < clusters; ++id) canon[order[id]] = id;
 
   Level out;
   out.cluster_of_item.resize(m);
-  for (std::uint32_t i = 0; i < m; ++i) out.cluster_of_item[i] = canon[leader_cluster[i]];
+  for_each(m, [&](std::uint32_t i) { out.cluster_of_item[i] = canon[leader_cluster[i]]; });
   Items& next = out.clusters;
   next.pos.resize(clusters);
   next.phi.resize(clusters);
   next.min_id.resize(clusters);
   next.moment.resize(clusters);
-  for (std::uint32_t id = 0; id < clusters; ++id) {
+  for_each(clusters, [&](std::uint32_t id) {
     const std::uint32_t c = order[id];
     next.phi[id] = phi[c];
     next.min_id[id] = min_id[c];
@@ -185,7 +201,7 @@ std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, st
     // (R1-HIER-014); it lies in the members' bounding box, so it is a valid position.
     for (std::size_t d = 0; d < 3; ++d)
       next.pos[id][d] = static_cast<std::int64_t>(fx::detail::rne_div(moment[c][d], phi[c]));
-  }
+  });
   return out;
 }
 

@@ -83,11 +83,12 @@ RadiusChoice choose_radius(const Items& particles, KdTree& tree0, const Progress
     }
     return std::nullopt;
   };
-  // With `parallel`, each round builds the step the bisection needs now and the one it builds
-  // next if that one fails and, given a third worker, the one it builds next if it passes; each on
-  // its own copy of tree0. Which steps are built changes how long the search takes, never the path
-  // it walks or its answer.
-  const int workers = parallel ? std::clamp(tbb::this_task_arena::max_concurrency(), 1, 3) : 1;
+  // With `parallel` and at least four workers, each round builds the step the bisection needs now
+  // and the ones it builds next if that one fails and if it passes, each on its own copy of
+  // tree0. (On fewer workers the parallel leader loop of each build already keeps them busy:
+  // measured, two builds at once on two cores take longer than one after the other.) Which steps
+  // are built changes how long the search takes, never the path it walks or its answer.
+  const int workers = parallel && tbb::this_task_arena::max_concurrency() >= 4 ? 3 : 1;
   std::vector<KdTree> trees;
   auto build = [&](std::uint32_t step, std::optional<std::uint32_t> on_fail, std::optional<std::uint32_t> on_pass) {
     std::vector<std::uint32_t> steps{step};
