@@ -1,6 +1,7 @@
-// Hierarchy build throughput (R1-HIER-010..033) on synthetic layouts of 10^4, 10^5 and 10^6
-// particles: points clustered in blobs inside the scene sphere (as spectral layouts are), phi
-// spread unevenly, every rule exact on Q32 raws. Input generation is outside the timed loop.
+// Hierarchy build throughput, serial and parallel (R1-HIER-010..033, R1-HIER-070), on synthetic
+// layouts of 10^4, 10^5 and 10^6 particles: points clustered in blobs inside the scene sphere (as
+// spectral layouts are), phi spread unevenly, every rule exact on Q32 raws. Input generation is
+// outside the timed loop.
 #include <benchmark/benchmark.h>
 
 #include <array>
@@ -62,11 +63,14 @@ const Layout& layout(std::size_t n) {
   return *slot;
 }
 
+// Arg 0: particles; arg 1: HierarchyOptions::parallel (R1-HIER-070; the same bytes either way).
 void BM_Hierarchy(benchmark::State& state) {
   const Layout& l = layout(static_cast<std::size_t>(state.range(0)));
+  r1::HierarchyOptions options;
+  options.parallel = state.range(1) != 0;
   std::size_t clusters = 0;
   for (auto _ : state) {
-    auto h = r1::build_hierarchy(l.pos, l.phi, l.color, l.ids);
+    auto h = r1::build_hierarchy(l.pos, l.phi, l.color, l.ids, options);
     if (!h.is_ok()) {
       state.SkipWithError(h.status().message().c_str());
       return;
@@ -77,6 +81,10 @@ void BM_Hierarchy(benchmark::State& state) {
   state.counters["level0_clusters"] = static_cast<double>(clusters);
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
-BENCHMARK(BM_Hierarchy)->Arg(10'000)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Hierarchy)
+    ->ArgsProduct({{10'000, 100'000, 1'000'000}, {0, 1}})
+    ->ArgNames({"n", "parallel"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 }  // namespace

@@ -235,14 +235,21 @@ void KdTree::search(std::uint32_t node, Query& query) {
     return;
   }
   std::uint32_t a = node + 1, b = nd.right;
-  u128 ma = box_distance2(query.q, nodes_[a]), mb = box_distance2(query.q, nodes_[b]);
-  // Nearer child first (ties: the one with the lower rank bound), so the bound tightens early.
-  if (mb < ma || (mb == ma && nodes_[b].min_alive < nodes_[a].min_alive)) {
-    std::swap(a, b);
-    std::swap(ma, mb);
+  const bool a_alive = nodes_[a].min_alive != kNone, b_alive = nodes_[b].min_alive != kNone;
+  if (a_alive && b_alive) {
+    u128 ma = box_distance2(query.q, nodes_[a]), mb = box_distance2(query.q, nodes_[b]);
+    // Nearer child first (ties: the one with the lower rank bound), so the bound tightens early.
+    if (mb < ma || (mb == ma && nodes_[b].min_alive < nodes_[a].min_alive)) {
+      std::swap(a, b);
+      std::swap(ma, mb);
+    }
+    if (may_hold(query, ma, nodes_[a].min_alive)) search<kTighten>(a, query);
+    if (may_hold(query, mb, nodes_[b].min_alive)) search<kTighten>(b, query);
+  } else if (a_alive || b_alive) {
+    // One child holds nothing alive: no distance to it is needed.
+    const std::uint32_t c = a_alive ? a : b;
+    if (may_hold(query, box_distance2(query.q, nodes_[c]), nodes_[c].min_alive)) search<kTighten>(c, query);
   }
-  if (nodes_[a].min_alive != kNone && may_hold(query, ma, nodes_[a].min_alive)) search<kTighten>(a, query);
-  if (nodes_[b].min_alive != kNone && may_hold(query, mb, nodes_[b].min_alive)) search<kTighten>(b, query);
   // The children's bounds are lower bounds (tightened if just visited): so is their minimum.
   if constexpr (kTighten) nd.min_alive = std::min(nodes_[a].min_alive, nodes_[b].min_alive);
 }

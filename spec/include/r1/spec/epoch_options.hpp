@@ -42,7 +42,7 @@ struct HierarchyOptions {
   // The finest clustering radius r_0 as a Q32 raw (scene units, >= 0). Unset: chosen from the data
   // by the search of R1-HIER-030..033.
   std::optional<std::int64_t> radius0_raw;
-  bool parallel = false;  // TBB for the radius search, the tree and the sorts: bit-identical results (R1-HIER-070)
+  bool parallel = false;  // TBB for the leader queries, the tree, the sorts and the radius search: bit-identical results (R1-HIER-070)
 };
 
 struct EpochOptions {
