@@ -159,7 +159,7 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_option("--overlay-file", c->overlay_file, "TOML lookup tables for --overlay custom");
   cmd->add_flag("--no-role-shapes", c->no_role_shapes, "all spheres instead of hub/bridge/leaf shapes");
   cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");
-  cmd->add_flag("--parallel", c->parallel, "use every core for the sparse products (same bits)");
+  cmd->add_flag("--parallel", c->parallel, "reference stages on every core: spectral, focus, encoding, hierarchy (same bits)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
   cmd->callback([c, &selected] { selected = [c] { return run_epoch_cli(*c); }; });
 }

@@ -20,8 +20,9 @@
 
 namespace r1 {
 
-// The cpu-reference's epoch stages. `parallel` turns on the TBB row loops of the spectral and
-// focus stages whatever options.parallel says (the same bits, R1-SPEC-071, R1-FOC-090); `fp64`
+// The cpu-reference's epoch stages. `parallel` turns on the TBB loops of the spectral, focus,
+// encoding and hierarchy stages whatever options.parallel says (the same bits, R1-SPEC-071,
+// R1-FOC-090, R1-ENC-020, R1-HIER-070); `fp64`
 // runs those two stages in IEEE doubles whatever options.domain says (R1-EPO-003); `kernels`, when
 // set, are the Q32 spectral kernels the solver runs on (a backend's, the same bits: R1-SOL-002).
 class ReferenceStages final : public EpochStages {

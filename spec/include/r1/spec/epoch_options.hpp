@@ -54,7 +54,7 @@ struct EpochOptions {
   std::string anchor_name = "anchor";  // names the anchor in messages (its file, as given)
   EncodingOptions encoding;
   HierarchyOptions hierarchy;
-  bool parallel = false;    // TBB row loops in spectral and focus: bit-identical results (R1-SPEC-071, R1-FOC-090)
+  bool parallel = false;    // TBB in spectral, focus, encoding and hierarchy: bit-identical results (R1-SPEC-071, R1-FOC-090, R1-ENC-020, R1-HIER-070)
 };
 
 }  // namespace r1
