@@ -20,7 +20,6 @@
 #include "r1/accel/cpu/panel_kernels.hpp"
 
 #include <immintrin.h>
-#include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -124,12 +123,16 @@ struct IfmaDots {
   std::vector<std::uint64_t> wsum, wbits;  // per c
 };
 
+// The lanes of a vector of 8 that hold one of `left` remaining entries.
+inline __mmask8 tail_mask(std::size_t left) {
+  return left >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << left) - 1);
+}
+
 R1_MASKED_SHIFT_WARNING_OFF
 template <std::size_t G>
 __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t rows, IfmaDots& d, std::size_t wr0,
                                                                       std::size_t q0, std::size_t c0, bool first) {
-  const std::size_t left = d.nq - q0;
-  const __mmask8 mask = left >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << left) - 1);
+  const __mmask8 mask = tail_mask(d.nq - q0);
   const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
   __m512i lo[G], hi[G];
   for (std::size_t j = 0; j < G; ++j) {
@@ -295,8 +298,7 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::in
   const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
   __m512i vs = _mm512_setzero_si512(), vb = _mm512_setzero_si512();
   for (std::size_t t = 0; t < nt; t += 8) {
-    const std::size_t left = nt - t;
-    const __mmask8 mask = left >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << left) - 1);
+    const __mmask8 mask = tail_mask(nt - t);
     const __m512i v = _mm512_maskz_loadu_epi64(mask, x + t);
     const __m512i o = _mm512_maskz_add_epi64(mask, v, off);
     _mm512_mask_storeu_epi64(xo + t, mask, o);
@@ -353,6 +355,11 @@ void transpose(const Panel<fx::Q32>& p, Cols cols, std::size_t t0, std::size_t r
   }
 }
 
+// The exact fall-back for one pair over rows [lo, hi): product by product.
+void exact_pair(const Panel<fx::Q32>& p, std::uint32_t a, std::uint32_t b, std::size_t lo, std::size_t hi, FastExact& acc) {
+  for (std::size_t i = lo; i < hi; ++i) acc.add(static_cast<i128>(p.at(i, a).raw) * p.at(i, b).raw);
+}
+
 // The kernels: the solver's, with dots() on the vector paths.
 class CpuPanelOps final : public PanelOps<fx::Q32> {
  public:
@@ -399,8 +406,7 @@ void CpuPanelOps::avx2_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
         // sum x' w' < 2^116; the corrections are below 2^115: all exact in i128.
         acc[k].add(static_cast<i128>(t) - (s.sx[q] + s.sw[c]) * static_cast<i128>(kOffset) - rows * (i128{1} << 102));
       } else {
-        for (std::size_t i = lo; i < hi; ++i)
-          acc[k].add(static_cast<i128>(p.at(i, qs[q]).raw) * p.at(i, ws[c]).raw);
+        exact_pair(p, qs[q], ws[c], lo, hi, acc[k]);
       }
     }
 }
@@ -445,8 +451,7 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
                          ((static_cast<u128>(d.xsum[q]) + d.wsum[c]) << kOffsetBits) + rows_kk;
           acc[k].add(static_cast<i128>(t));
         } else {
-          for (std::size_t i = r0; i < r0 + rows; ++i)
-            acc[k].add(static_cast<i128>(p.at(i, qs[q]).raw) * p.at(i, ws[c]).raw);
+          exact_pair(p, qs[q], ws[c], r0, r0 + rows, acc[k]);
         }
       }
   }
@@ -454,50 +459,26 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
 
 void CpuPanelOps::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<double> out) const {
   if (level_ == Simd::kPortable) return PanelOps<fx::Q32>::dots(p, qs, ws, out);
-  const std::size_t nq = qs.size(), nw = ws.size(), pairs = nq * nw;
-  if (out.size() != pairs || p.rows() != size()) throw std::invalid_argument("spectral dots: sizes");
-  for (const std::uint32_t c : qs)
-    if (c >= p.cols()) throw std::invalid_argument("panel: column out of range");
-  for (const std::uint32_t c : ws)
-    if (c >= p.cols()) throw std::invalid_argument("panel: column out of range");
-  if (pairs == 0) return;
-  struct Part {
-    Scratch s;
-    IfmaDots d;
-    std::vector<FastExact> acc;
-  };
-  auto sum_block = [&](Part& part, std::vector<FastExact>& acc, std::size_t lo, std::size_t hi) {
-    if (level_ == Simd::kAvx512Ifma) {
-      ifma_block_sum(p, qs, ws, lo, hi, part.d, acc);
-    } else {
-      avx2_block_sum(p, qs, ws, lo, hi, part.s, acc);
-    }
-  };
-  std::vector<FastExact> total(pairs);
-  if (!parallel() || size() < spectral::kParallelMin) {
-    Part part;
-    spectral::for_row_blocks(size(), false, [&](std::size_t lo, std::size_t hi) { sum_block(part, total, lo, hi); });
-  } else {
-    tbb::enumerable_thread_specific<Part> parts([pairs] { return Part{Scratch{}, IfmaDots{}, std::vector<FastExact>(pairs)}; });
-    spectral::for_row_blocks(size(), true, [&](std::size_t lo, std::size_t hi) {
-      Part& part = parts.local();
-      sum_block(part, part.acc, lo, hi);
-    });
-    for (const auto& part : parts)  // exact: the merge order plays no part
-      for (std::size_t k = 0; k < pairs; ++k) total[k].merge(part.acc[k]);
-  }
-  for (std::size_t k = 0; k < pairs; ++k) out[k] = spectral::to_double_scaled(total[k].total(), 2 * frac_bits() + scale_exponent());
+  spectral::check_dots(p.rows(), size(), p.cols(), qs, ws, out.size());
+  if (out.empty()) return;
+  // The scratch lives per row block (a few KB against 4096 rows of products).
+  spectral::exact_dots(size(), parallel(), 2 * frac_bits() + scale_exponent(), out,
+                       [&](std::size_t lo, std::size_t hi, std::vector<FastExact>& acc) {
+                         if (level_ == Simd::kAvx512Ifma) {
+                           IfmaDots d;
+                           ifma_block_sum(p, qs, ws, lo, hi, d, acc);
+                         } else {
+                           Scratch s;
+                           avx2_block_sum(p, qs, ws, lo, hi, s, acc);
+                         }
+                       });
 }
 
 void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, std::span<const double> c) const {
   const std::size_t no = outs.size(), nt = terms.size();
   if (level_ != Simd::kAvx512Ifma || nt == 0 || nt > kMaxIfmaTerms || no == 0)
     return PanelOps<fx::Q32>::combine(p, outs, bases, terms, c);
-  if (c.size() != nt * no || (!bases.empty() && bases.size() != no) || p.rows() != size())
-    throw std::invalid_argument("spectral combine: sizes");
-  for (Cols cols : {outs, bases, terms})
-    for (const std::uint32_t k : cols)
-      if (k >= p.cols()) throw std::invalid_argument("panel: column out of range");
+  spectral::check_combine(p.rows(), size(), p.cols(), outs, bases, terms, c.size());
   CombinePlan plan;
   plan.no = no;
   plan.nt = nt;

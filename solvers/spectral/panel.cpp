@@ -60,9 +60,14 @@ void check_cols(Cols cols, std::size_t limit) {
   for (const std::uint32_t c : cols)
     if (c >= limit) throw std::invalid_argument("panel: column out of range");
 }
+}  // namespace
 
-// The shapes combine() needs: coefficients for every (term, output), bases absent or one per
-// output, every column inside the panel.
+void check_dots(std::size_t rows, std::size_t n, std::size_t cols, Cols qs, Cols ws, std::size_t outs) {
+  if (outs != qs.size() * ws.size() || rows != n) throw std::invalid_argument("spectral dots: sizes");
+  check_cols(qs, cols);
+  check_cols(ws, cols);
+}
+
 void check_combine(std::size_t rows, std::size_t n, std::size_t cols, Cols outs, Cols bases, Cols terms,
                    std::size_t coefs) {
   if (coefs != terms.size() * outs.size() || (!bases.empty() && bases.size() != outs.size()) || rows != n)
@@ -71,7 +76,20 @@ void check_combine(std::size_t rows, std::size_t n, std::size_t cols, Cols outs,
   check_cols(bases, cols);
   check_cols(terms, cols);
 }
-}  // namespace
+
+void exact_dots(std::size_t n, bool parallel, int shift, std::span<double> out, const BlockDots& block_sum) {
+  const std::size_t pairs = out.size();
+  std::vector<FastExact> total(pairs);
+  if (!parallel || n < kParallelMin) {
+    for_row_blocks(n, false, [&](std::size_t lo, std::size_t hi) { block_sum(lo, hi, total); });
+  } else {
+    tbb::enumerable_thread_specific<std::vector<FastExact>> parts([pairs] { return std::vector<FastExact>(pairs); });
+    for_row_blocks(n, true, [&](std::size_t lo, std::size_t hi) { block_sum(lo, hi, parts.local()); });
+    for (const auto& part : parts)  // exact: the merge order plays no part
+      for (std::size_t k = 0; k < pairs; ++k) total[k].merge(part[k]);
+  }
+  for (std::size_t k = 0; k < pairs; ++k) out[k] = to_double_scaled(total[k].total(), shift);
+}
 
 template <class Scalar>
 double PanelOps<Scalar>::dot(const Panel<Scalar>& p, std::uint32_t a, std::uint32_t b) const {
@@ -162,9 +180,7 @@ void tile_dots(const std::int64_t* xt, std::size_t nq, std::size_t rows, const s
 template <>
 void PanelOps<fx::Q32>::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<double> out) const {
   const std::size_t nq = qs.size(), nw = ws.size(), pairs = nq * nw;
-  if (out.size() != pairs || p.rows() != n_) throw std::invalid_argument("spectral dots: sizes");
-  check_cols(qs, p.cols());
-  check_cols(ws, p.cols());
+  check_dots(p.rows(), n_, p.cols(), qs, ws, out.size());
   // Accumulator width: 4 chains for blocks of columns, fewer for one or two.
   const std::size_t width = nw >= 3 ? 4 : nw, stride = (nw + width - 1) / width * width;
   auto block_sum = [&](std::size_t lo, std::size_t hi, std::vector<FastExact>& acc) {
@@ -202,17 +218,8 @@ void PanelOps<fx::Q32>::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::spa
         }
       }
   };
-  std::vector<FastExact> total(pairs);
-  if (!parallel_ || n_ < kParallelMin) {
-    for_row_blocks(n_, false, [&](std::size_t lo, std::size_t hi) { block_sum(lo, hi, total); });
-  } else {
-    tbb::enumerable_thread_specific<std::vector<FastExact>> parts([pairs] { return std::vector<FastExact>(pairs); });
-    for_row_blocks(n_, true, [&](std::size_t lo, std::size_t hi) { block_sum(lo, hi, parts.local()); });
-    for (const auto& part : parts)  // exact: the merge order plays no part
-      for (std::size_t k = 0; k < pairs; ++k) total[k].merge(part[k]);
-  }
   // Products count units of 2^-(2 frac); the scaled inner product divides by 2^e.
-  for (std::size_t k = 0; k < pairs; ++k) out[k] = to_double_scaled(total[k].total(), 2 * frac_ + e_);
+  exact_dots(n_, parallel_, 2 * frac_ + e_, out, block_sum);
 }
 
 namespace {

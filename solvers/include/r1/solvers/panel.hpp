@@ -157,6 +157,19 @@ void PanelOps<double>::random(Panel<double>&, std::uint32_t, std::uint64_t, std:
 inline constexpr std::size_t kBlock = 4096;
 inline constexpr std::size_t kParallelMin = std::size_t{1} << 15;
 
+// The argument checks of PanelOps::dots and PanelOps::combine (sizes, every column inside a panel
+// of `cols` columns), for kernels that override them: std::invalid_argument on a mismatch.
+void check_dots(std::size_t rows, std::size_t n, std::size_t cols, Cols qs, Cols ws, std::size_t outs);
+void check_combine(std::size_t rows, std::size_t n, std::size_t cols, Cols outs, Cols bases, Cols terms,
+                   std::size_t coefs);
+
+// The exact inner products' reduction (R1-SPEC-011): block_sum(lo, hi, acc) adds the exact
+// products of rows [lo, hi) of every pair into acc[pair]; the row blocks run serially or as TBB
+// tasks (exact sums merge in any order), and out[pair] = the total times 2^-shift, correctly
+// rounded. Q32 kernels differ only in how they sum a block.
+using BlockDots = std::function<void(std::size_t lo, std::size_t hi, std::vector<FastExact>& acc)>;
+void exact_dots(std::size_t n, bool parallel, int shift, std::span<double> out, const BlockDots& block_sum);
+
 // Runs body(lo, hi) over [0, n) in kBlock pieces: serially, or as TBB tasks when asked and the
 // range is long enough. Callers only write disjoint ranges, so the split never shows.
 void for_row_blocks(std::size_t n, bool parallel, const std::function<void(std::size_t, std::size_t)>& body);
