@@ -1,6 +1,8 @@
 // r1 epoch SNAPSHOT [--backend NAME] -o DIR: the canonical epoch, through the chosen backend's
 // stages, and its summary (R1-EPO-001..013, R1-BKD-016).
 #include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <optional>
 
@@ -13,6 +15,7 @@
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "r1/reference/incremental.hpp"
 
 namespace r1::cli {
 
@@ -34,6 +37,11 @@ struct EpochCliOptions {
   bool no_timings = false;
   bool parallel = false;
   bool quiet = false;
+  // Incremental epochs (spec/incremental.md): the earlier epoch and the update's settings.
+  std::string from;
+  std::optional<std::uint32_t> hops, full_every;
+  std::optional<double> eps_x, full_norm;
+  bool full = false;
 };
 
 Status parse_q32(const std::string& text, const char* option, Q32& out) {
@@ -106,6 +114,19 @@ void print_summary(const Epoch& e, const std::string& dir, double total_s) {
   }
   std::printf("clusters           level 0: %zu, level 1: %zu, level 2: %zu, level 3: %zu\n", e.hierarchy.levels[0].size(),
               e.hierarchy.levels[1].size(), e.hierarchy.levels[2].size(), e.hierarchy.levels[3].size());
+  if (e.update) {
+    const UpdateInfo& u = *e.update;
+    std::printf("update             %s: %llu touched (%llu new, %llu left), N_h %llu particles (%u hops), ||dL|| %.3g\n",
+                u.incremental ? "incremental" : "full solve", static_cast<unsigned long long>(u.touched),
+                static_cast<unsigned long long>(u.added), static_cast<unsigned long long>(u.dropped),
+                static_cast<unsigned long long>(u.region), u.hops, u.delta_norm);
+    if (u.incremental) {
+      std::printf("certificate        %.3g scene units <= eps_X %.3g; %u epochs since the full solve\n", u.certificate, u.eps_x,
+                  u.epochs_since_full);
+    } else {
+      std::printf("full because       %s\n", u.reason.c_str());
+    }
+  }
   std::printf("time per stage    ");
   for (const auto& t : e.timings) std::printf(" %s %.2f s,", t.stage.c_str(), t.seconds);
   std::printf(" total %.2f s\n", total_s);
@@ -113,6 +134,15 @@ void print_summary(const Epoch& e, const std::string& dir, double total_s) {
 
 Status run_epoch_cli(const EpochCliOptions& c) {
   if (c.out.empty()) return Status::input("epoch: say where to write the epoch (-o DIR)");
+  if (c.from.empty() && (c.hops || c.full_every || c.eps_x || c.full_norm || c.full))
+    return Status::input("epoch: --hops, --eps-x, --full-every, --full-norm and --full need --from PREV_EPOCH_DIR");
+  if (!c.from.empty() && !c.anchor.empty())
+    return Status::input("epoch: --from aligns to the earlier epoch's anchor; leave out --anchor");
+  if (c.eps_x && !(*c.eps_x > 0 && *c.eps_x < 1)) return Status::input("epoch: --eps-x must lie in (0, 1)");
+  if (c.full_norm && !(*c.full_norm >= 0 && std::isfinite(*c.full_norm)))
+    return Status::input("epoch: --full-norm must be a finite number >= 0");
+  if (c.full_every && *c.full_every == 0) return Status::input("epoch: --full-every must be at least 1");
+  if (c.hops && *c.hops > 64) return Status::input("epoch: --hops must be at most 64");
   R1_ASSIGN(EpochOptions o, epoch_options(c));
   R1_ASSIGN(const ChosenBackend chosen, c.backend.make());
   ProgressLine progress;
@@ -121,7 +151,21 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   R1_ASSIGN(const Snapshot s, read_snapshot(c.snapshot, ro));
   R1_ASSIGN(const Graph g, build_graph(s, progress.sink()));
   const double read_s = seconds_since(t0);
-  R1_ASSIGN(Epoch e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
+  Epoch e;
+  if (c.from.empty()) {
+    R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
+  } else {
+    // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034).
+    R1_ASSIGN(const Epoch prev, read_epoch(c.from));
+    R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
+    UpdateOptions uo;
+    if (c.eps_x) uo.eps = *c.eps_x;
+    uo.hops = c.hops;
+    if (c.full_every) uo.full_every = *c.full_every;
+    if (c.full_norm) uo.full_norm = *c.full_norm;
+    uo.force_full = c.full;
+    R1_ASSIGN(e, run_epoch_from(prev, anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
+  }
   e.timings.insert(e.timings.begin(), {"read", read_s});
   const auto t2 = std::chrono::steady_clock::now();
   EpochWriteOptions wo;
@@ -161,6 +205,12 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");
   cmd->add_flag("--parallel", c->parallel, "reference stages on every core: spectral, focus, encoding, hierarchy (same bits)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
+  cmd->add_option("--from", c->from, "earlier epoch of this chain: update it incrementally where the certificate allows");
+  cmd->add_option("--hops", c->hops, "with --from: h, the neighbourhood of the edits (default from --eps-x and --mu)");
+  cmd->add_option("--eps-x", c->eps_x, "with --from: position bound eps_X as a fraction of R_scene (0.001)");
+  cmd->add_option("--full-every", c->full_every, "with --from: a full solve at least every N epochs (64)");
+  cmd->add_option("--full-norm", c->full_norm, "with --from: a full solve once the summed ||dL|| bound exceeds this (0.05)");
+  cmd->add_flag("--full", c->full, "with --from: solve in full (the update's record still written)");
   cmd->callback([c, &selected] { selected = [c] { return run_epoch_cli(*c); }; });
 }
 

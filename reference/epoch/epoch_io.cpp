@@ -4,7 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -49,6 +51,60 @@ const char* domain_name(NumericDomain d) { return d == NumericDomain::kQ32 ? "q3
 
 // Q32 parameters as their exact decimal strings: a JSON number would pass through a double.
 json q32_json(Q32 q) { return q.to_exact_string(); }
+
+// JSON has no infinity: an unbounded certificate is written as null (R1-INC-040).
+json bound_json(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+double bound_from(const json& j) { return j.is_null() ? std::numeric_limits<double>::infinity() : j.get<double>(); }
+
+json update_json(const UpdateInfo& u) {
+  json vb = json::array();
+  for (double x : u.vector_bound) vb.push_back(bound_json(x));
+  return {{"mode", u.incremental ? "incremental" : "full"},
+          {"reason", u.reason},
+          {"epochs_since_full", u.epochs_since_full},
+          {"hops", u.hops},
+          {"touched", u.touched},
+          {"added", u.added},
+          {"dropped", u.dropped},
+          {"resized_since_full", u.resized_since_full},
+          {"region", u.region},
+          {"delta_norm", u.delta_norm},
+          {"delta_norm_since_full", u.delta_norm_since_full},
+          {"full_eigenvalues", u.full_eigenvalues},
+          {"full_residuals", u.full_residuals},
+          {"vector_bound", vb},
+          {"certificate", bound_json(u.certificate)},
+          {"eps_x", u.eps_x}};
+}
+
+UpdateInfo update_from(const json& j) {
+  UpdateInfo u;
+  u.incremental = j.at("mode").get<std::string>() == "incremental";
+  u.reason = j.at("reason").get<std::string>();
+  u.epochs_since_full = j.at("epochs_since_full").get<std::uint32_t>();
+  u.hops = j.at("hops").get<std::uint32_t>();
+  u.touched = j.at("touched").get<std::uint64_t>();
+  u.added = j.at("added").get<std::uint64_t>();
+  u.dropped = j.at("dropped").get<std::uint64_t>();
+  u.resized_since_full = j.at("resized_since_full").get<std::uint64_t>();
+  u.region = j.at("region").get<std::uint64_t>();
+  u.delta_norm = j.at("delta_norm").get<double>();
+  u.delta_norm_since_full = j.at("delta_norm_since_full").get<double>();
+  u.full_eigenvalues = j.at("full_eigenvalues").get<std::array<double, 6>>();
+  u.full_residuals = j.at("full_residuals").get<std::array<double, 6>>();
+  const json& vb = j.at("vector_bound");
+  if (!vb.is_array() || vb.size() != 5) throw json::type_error::create(302, "vector_bound is not 5 numbers", &vb);
+  for (std::size_t k = 0; k < 5; ++k) u.vector_bound[k] = bound_from(vb[k]);
+  u.certificate = bound_from(j.at("certificate"));
+  u.eps_x = j.at("eps_x").get<double>();
+  return u;
+}
+
+Q32 q32_from(const json& j, const char* what, const std::string& manifest) {
+  const auto q = Q32::checked_from_decimal(j.at(what).get<std::string>());
+  if (!q) throw json::type_error::create(302, manifest + ": parameter " + what + " is not a Q32 decimal", &j);
+  return *q;
+}
 
 bool is_epoch_dir(const fs::path& dir) { return manifest_format_is(dir, kFormat); }
 
@@ -158,6 +214,7 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
     if (name == "anchor.bin") m["anchor_digest"] = file_digest(bytes);
   }
   m["files"] = fj;
+  if (e.update) m["update"] = update_json(*e.update);
   if (o.timings) {
     json tj = json::object();
     for (const auto& st : e.timings) tj[st.stage] = st.seconds;
@@ -281,7 +338,31 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   e.spectrum.found = m.at("found").get<std::uint32_t>();
   e.spectrum.rho = m.at("rho").get<double>();
   e.frame.scale = m.at("scale").get<double>();
-  e.encoding.overlay = m.at("parameters").at("overlay").get<std::string>();
+  const json& al = m.at("alignment");
+  Alignment& a = e.frame.alignment;
+  a.genesis = al.at("genesis").get<bool>();
+  a.rotation = al.at("rotation").get<std::array<double, 9>>();
+  a.scale = al.at("scale").get<double>();
+  a.translation = al.at("translation").get<std::array<double, 3>>();
+  a.reflected = al.at("reflected").get<bool>();
+  a.matched = al.at("matched").get<std::uint32_t>();
+  a.rms = al.at("rms").get<double>();
+  const json& pj = m.at("parameters");
+  e.encoding.overlay = pj.at("overlay").get<std::string>();
+  TriKernelParams& tk = e.trikernel;
+  tk.lambda_d = q32_from(pj, "lambda_d", manifest);
+  tk.lambda_s = q32_from(pj, "lambda_s", manifest);
+  tk.lambda_h = q32_from(pj, "lambda_h", manifest);
+  tk.teleport = q32_from(pj, "teleport", manifest);
+  tk.mu = q32_from(pj, "mu", manifest);
+  tk.tau = q32_from(pj, "tau", manifest);
+  tk.eps = q32_from(pj, "eps", manifest);
+  tk.max_steps = pj.at("max_steps").get<std::uint32_t>();
+  tk.chebyshev_degree = pj.at("chebyshev_degree").get<std::uint32_t>();
+  if (pj.at("rho").is_number()) e.spectral_params.rho = pj.at("rho").get<double>();
+  e.spectral_params.basis = pj.at("basis").get<std::uint32_t>();
+  e.spectral_params.tolerance = pj.at("tolerance").get<double>();
+  if (m.contains("update")) e.update = update_from(m.at("update"));
 
   EpochFiles files(dir, n);
   R1_TRY(files.load(m.at("files")));

@@ -120,8 +120,7 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   return run_epoch(snapshot, graph, o, reference, progress);
 }
 
-Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, EpochStages& st,
-                        const ProgressFn& progress) {
+Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o) {
   Epoch e;
   Stopwatch clock(e.timings);
   e.domain = o.domain;
@@ -146,21 +145,12 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
       if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
   e.trikernel = o.trikernel;
   e.spectral_params = o.spectral;
+  return e;
+}
 
-  R1_ASSIGN(e.spectrum, st.spectral(graph, o, progress));
-  clock.lap(stage_name(Stage::kSpectral));
-
-  // R1-EPO-002: lambda_2 for T(eps); 0 for a disconnected graph.
-  const double lambda2 = e.components == 1 && e.spectrum.found >= 1 ? e.spectrum.eigenvalues[1] : 0.0;
-  R1_ASSIGN(e.focus, st.focus(graph, o, lambda2, progress));
-  clock.lap(stage_name(Stage::kFocus));
-
-  apply_sign_convention(e.spectrum);
-  // The anchor arrives as a value (R1-BKD-014); the caller read the file.
-  const Anchor* anchor = o.anchor ? &*o.anchor : nullptr;
-  R1_ASSIGN(e.frame, st.frame(snapshot, e.spectrum, anchor, anchor ? o.anchor_name : std::string()));
-  clock.lap(stage_name(Stage::kFrame));
-
+Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, EpochStages& st,
+                  const ProgressFn& progress) {
+  Stopwatch clock(e.timings);
   // EpochOptions::parallel reaches the encoding and hierarchy stages through their own options
   // (R1-ENC-020, R1-HIER-070): how they run, never what they compute.
   EncodingOptions encoding_options = o.encoding;
@@ -178,6 +168,27 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   if (e.focus.phi.size() != n || e.frame.position.size() != n || e.encoding.color.size() != n ||
       e.hierarchy.cluster_of[0].size() != n)
     return Status::internal("an epoch stage returned data for the wrong number of particles");
+  return Status::ok();
+}
+
+Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, EpochStages& st,
+                        const ProgressFn& progress) {
+  Epoch e = epoch_header(snapshot, graph, o);
+  Stopwatch clock(e.timings);
+  R1_ASSIGN(e.spectrum, st.spectral(graph, o, progress));
+  clock.lap(stage_name(Stage::kSpectral));
+
+  // R1-EPO-002: lambda_2 for T(eps); 0 for a disconnected graph.
+  const double lambda2 = e.components == 1 && e.spectrum.found >= 1 ? e.spectrum.eigenvalues[1] : 0.0;
+  R1_ASSIGN(e.focus, st.focus(graph, o, lambda2, progress));
+  clock.lap(stage_name(Stage::kFocus));
+
+  apply_sign_convention(e.spectrum);
+  // The anchor arrives as a value (R1-BKD-014); the caller read the file.
+  const Anchor* anchor = o.anchor ? &*o.anchor : nullptr;
+  R1_ASSIGN(e.frame, st.frame(snapshot, e.spectrum, anchor, anchor ? o.anchor_name : std::string()));
+  clock.lap(stage_name(Stage::kFrame));
+  R1_TRY(epoch_tail(e, snapshot, graph, o, st, progress));
   return e;
 }
 

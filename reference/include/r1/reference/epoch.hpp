@@ -58,6 +58,14 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
 Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
                         const ProgressFn& progress = {});
 
+// The parts every pipeline fills the same way (R1-BKD-011): the digest (its time is the first
+// timing), ids, titles, counts, the layout edges and the parameters.
+Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOptions& options);
+// Encoding and hierarchy for an epoch whose focus, sign-conventioned spectrum and frame are set,
+// then the check that every stage returned data of the epoch's shape.
+Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
+                  EpochStages& stages, const ProgressFn& progress);
+
 // The reference stages alone, as ReferenceStages calls them (options.domain and options.parallel
 // decide).
 Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& options, const ProgressFn& progress,

@@ -140,6 +140,28 @@ struct LayoutEdge {
   bool operator==(const LayoutEdge&) const = default;
 };
 
+// How an epoch computed from an earlier one came about (R1-INC-040, spec/incremental.md): the
+// edit batch, the neighbourhood N_h, whether the spectral stage was updated locally or solved in
+// full, and the certificate. Present only in epochs made with `r1 epoch --from`.
+struct UpdateInfo {
+  bool incremental = false;          // positions updated on N_h; false: a full solve
+  std::string reason;                // why a full solve ran ("" when incremental)
+  std::uint32_t epochs_since_full = 0;
+  std::uint32_t hops = 0;            // h
+  std::uint64_t touched = 0;         // particles whose row of the layout graph changed (new ones included)
+  std::uint64_t added = 0, dropped = 0;
+  std::uint64_t resized_since_full = 0;  // particles added or dropped since the last full solve
+  std::uint64_t region = 0;          // |N_h|
+  double delta_norm = 0;             // bound on ||L~_next - L~_prev||_2 of this batch
+  double delta_norm_since_full = 0;  // the bound summed since the last full solve
+  std::array<double, 6> full_eigenvalues{}, full_residuals{};  // of the last full solve
+  // Per u_2..u_6: a bound on ||u - u*|| (u* the exact unit eigenvector of L~_next, sign-matched);
+  // infinity where none holds (u_6: the solve does not bound lambda_7).
+  std::array<double, 5> vector_bound{};
+  double certificate = 0;            // bound on the position error, scene units (infinity: none)
+  double eps_x = 0;                  // the bound an incremental epoch must meet, scene units
+};
+
 struct StageTiming {
   std::string stage;
   double seconds = 0;
@@ -163,6 +185,7 @@ struct Epoch {
   Hierarchy hierarchy;
   std::vector<LayoutEdge> edges;           // layout graph pairs, by (p, q) ascending
   std::vector<StageTiming> timings;
+  std::optional<UpdateInfo> update;        // epochs made from an earlier one (r1 epoch --from)
 };
 
 }  // namespace r1

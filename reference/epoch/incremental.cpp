@@ -1,0 +1,575 @@
+// Incremental epochs (R-1.0 3.3; spec/incremental.md R1-INC-001..050): the edit batch, N_h, the
+// local update of u_2..u_6 on N_h with a Davis-Kahan certificate, and the fall-back to a full
+// solve.
+#include "r1/reference/incremental.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "r1/reference/epoch.hpp"
+#include "r1/reference/frame.hpp"
+#include "r1/reference/intern_index.hpp"
+#include "r1/solvers/exact_round.hpp"
+#include "r1/solvers/spectral.hpp"
+
+namespace r1 {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The earlier epoch's A_sym and A2 as rows (both directions of every layout edge).
+struct Rows {
+  std::vector<std::uint64_t> ptr;
+  std::vector<std::uint32_t> col;
+  std::vector<std::int64_t> w, a2;
+  std::vector<std::uint64_t> degree;
+};
+
+Rows prev_rows(const Epoch& prev) {
+  const std::size_t n = prev.ids.size();
+  Rows r;
+  r.ptr.assign(n + 1, 0);
+  for (const LayoutEdge& e : prev.edges) {
+    ++r.ptr[e.p + 1];
+    ++r.ptr[e.q + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) r.ptr[i + 1] += r.ptr[i];
+  r.col.resize(r.ptr[n]);
+  r.w.resize(r.ptr[n]);
+  r.a2.resize(r.ptr[n]);
+  std::vector<std::uint64_t> fill(r.ptr.begin(), r.ptr.end() - 1);
+  // Edges are sorted by (p, q): row p receives q ascending, row q receives p ascending, so every
+  // row ends up sorted by column.
+  for (const LayoutEdge& e : prev.edges) {
+    const std::uint64_t a = fill[e.p]++, b = fill[e.q]++;
+    r.col[a] = e.q;
+    r.w[a] = e.w_raw;
+    r.a2[a] = e.a2_raw;
+    r.col[b] = e.p;
+    r.w[b] = e.w_raw;
+    r.a2[b] = -e.a2_raw;
+  }
+  r.degree.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::uint64_t k = r.ptr[i]; k < r.ptr[i + 1]; ++k) r.degree[i] += static_cast<std::uint64_t>(r.w[k]);
+  return r;
+}
+
+double m_entry(std::int64_t w, std::uint64_t di, std::uint64_t dj) {
+  return static_cast<double>(w) / std::sqrt(static_cast<double>(di) * static_cast<double>(dj));
+}
+
+struct Entry {
+  std::uint64_t key;  // next column, or n + earlier column for a particle that left
+  std::int64_t w, a2;
+  double m;
+};
+
+}  // namespace
+
+std::uint32_t hops_for(double eps, double mu) {
+  // The least h >= 1 with mu (1 + mu)^(h + 1) >= 1 / eps: the tail of the springs Green's function
+  // beyond h hops, sum_(k > h) (1 + mu)^-(k + 1) ||M||^k <= (1 + mu)^-(h + 1) / mu, is within eps.
+  // Plain products, no libm: the same h on every machine.
+  std::uint32_t h = 1;
+  double x = mu * (1 + mu) * (1 + mu);
+  while (x * eps < 1 && h < 64) {
+    x = x * (1 + mu);
+    ++h;
+  }
+  return h;
+}
+
+std::vector<std::uint32_t> neighbourhood(const Graph& g, const std::vector<std::uint32_t>& seeds, std::uint32_t h) {
+  std::vector<char> in(g.n, 0);
+  std::vector<std::uint32_t> all, frontier;
+  for (std::uint32_t s : seeds)
+    if (!in[s]) {
+      in[s] = 1;
+      frontier.push_back(s);
+    }
+  all = frontier;
+  for (std::uint32_t hop = 0; hop < h && !frontier.empty(); ++hop) {
+    std::vector<std::uint32_t> next;
+    for (std::uint32_t i : frontier)
+      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+        if (!in[g.col[k]]) {
+          in[g.col[k]] = 1;
+          next.push_back(g.col[k]);
+        }
+    all.insert(all.end(), next.begin(), next.end());
+    frontier = std::move(next);
+  }
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name) {
+  const std::size_t np = prev.ids.size(), n = next.particles.size();
+  const IdIndex index = IdIndex::over(next.particles);
+  std::vector<std::int64_t> next_of(np);
+  for (std::size_t p = 0; p < np; ++p) next_of[p] = index.find(prev.ids[p], next.particles);
+  // R1-INC-002: the anchor set is immutable along a chain.
+  for (std::size_t p = 0; p < anchor_count(np); ++p)
+    if (next_of[p] < 0)
+      return Status::input(prev_name + ": not an epoch of this snapshot's chain: its anchor particle " + std::to_string(p) +
+                           " (" + hemera::to_hex(prev.ids[p]).substr(0, 16) + "...) is not in " + next.source);
+  EditBatch b;
+  b.prev_of.assign(n, -1);
+  for (std::size_t p = 0; p < np; ++p) {
+    if (next_of[p] >= 0) {
+      b.prev_of[static_cast<std::size_t>(next_of[p])] = static_cast<std::int64_t>(p);
+    } else {
+      ++b.dropped;
+    }
+  }
+  const Rows pr = prev_rows(prev);
+
+  // Row i's entries keyed by next column: the next graph's, and the earlier one's mapped.
+  auto next_row = [&](std::uint32_t i, std::vector<Entry>& out) {
+    out.clear();
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+      out.push_back({g.col[k], g.w[k], g.a2[k], m_entry(g.w[k], g.degree[i], g.degree[g.col[k]])});
+  };
+  auto prev_row = [&](std::size_t p, std::vector<Entry>& out) {
+    out.clear();
+    for (std::uint64_t k = pr.ptr[p]; k < pr.ptr[p + 1]; ++k) {
+      const std::uint32_t c = pr.col[k];
+      const std::uint64_t key = next_of[c] >= 0 ? static_cast<std::uint64_t>(next_of[c]) : n + c;
+      out.push_back({key, pr.w[k], pr.a2[k], m_entry(pr.w[k], pr.degree[p], pr.degree[c])});
+    }
+    if (!std::is_sorted(out.begin(), out.end(), [](const Entry& x, const Entry& y) { return x.key < y.key; }))
+      std::sort(out.begin(), out.end(), [](const Entry& x, const Entry& y) { return x.key < y.key; });
+  };
+
+  std::vector<Entry> a, c;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (b.prev_of[i] < 0) {
+      ++b.added;
+      b.touched.push_back(i);
+      continue;
+    }
+    next_row(i, a);
+    prev_row(static_cast<std::size_t>(b.prev_of[i]), c);
+    bool same = a.size() == c.size();
+    for (std::size_t k = 0; same && k < a.size(); ++k) same = a[k].key == c[k].key && a[k].w == c[k].w && a[k].a2 == c[k].a2;
+    if (!same) b.touched.push_back(i);
+  }
+
+  // ||Delta M||_F over every changed entry (R1-INC-012): each lies in a row of N_1 = touched and
+  // their neighbours, or in a row of a particle that left. Entries in fp64 (relative error
+  // ~1e-16, covered by the margin); the rounding of each Q32 entry to its raw (2^-33 on either
+  // side) adds 2^-32 per changed entry.
+  std::vector<std::uint32_t> n1 = neighbourhood(g, b.touched, 1);
+  double sum = 0, max_row = 0;  // ||Delta M||_F^2 and ||Delta M||_inf (max absolute row sum)
+  std::uint64_t changed = 0;
+  for (std::uint32_t i : n1) {
+    next_row(i, a);
+    if (b.prev_of[i] >= 0) {
+      prev_row(static_cast<std::size_t>(b.prev_of[i]), c);
+    } else {
+      c.clear();
+    }
+    std::size_t x = 0, y = 0;
+    double row = 0;
+    while (x < a.size() || y < c.size()) {
+      double d;
+      if (y == c.size() || (x < a.size() && a[x].key < c[y].key)) {
+        d = a[x++].m;
+      } else if (x == a.size() || c[y].key < a[x].key) {
+        d = c[y++].m;
+      } else {
+        d = a[x++].m - c[y++].m;
+      }
+      if (d != 0) {
+        sum = sum + d * d;
+        row = row + std::fabs(d);
+        ++changed;
+      }
+    }
+    max_row = std::max(max_row, row);
+  }
+  for (std::size_t p = 0; p < np; ++p) {
+    if (next_of[p] >= 0) continue;
+    prev_row(p, c);
+    double row = 0;
+    for (const Entry& e : c) {
+      sum = sum + e.m * e.m;
+      row = row + e.m;
+      ++changed;
+    }
+    max_row = std::max(max_row, row);
+  }
+  // ||Delta M||_2 <= min(||.||_F, ||.||_inf) (symmetric: ||.||_2 <= sqrt(||.||_1 ||.||_inf) = ||.||_inf).
+  b.delta_norm = std::min(std::sqrt(sum), max_row) * (1 + 1e-9) + 0x1p-32 * std::sqrt(static_cast<double>(changed)) + 1e-15;
+  b.same_scale = true;
+  return b;
+}
+
+namespace {
+
+// The local least-squares correction of one vector (R1-INC-031), in fp64 over the rows of
+// N_(h+1) (compact indices), the correction supported on N_h.
+struct Local {
+  std::vector<std::uint32_t> rows;     // N_(h+1), ascending: global index of each compact row
+  std::vector<std::int32_t> where;     // per particle: compact row, or -1
+  std::vector<char> inner;             // per compact row: in N_h
+  std::vector<double> m;               // M entries (value units) in the graph's entry order
+};
+
+// y = (L~ - theta) x on the compact rows, x zero outside N_h.
+void local_apply(const Graph& g, const Local& loc, const std::vector<double>& x, double theta, std::vector<double>& y) {
+  y.assign(loc.rows.size(), 0.0);
+  for (std::size_t a = 0; a < loc.rows.size(); ++a) {
+    const std::uint32_t i = loc.rows[a];
+    double s = 0;
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
+      const std::int32_t b = loc.where[g.col[k]];
+      if (b >= 0 && loc.inner[static_cast<std::size_t>(b)]) s = s + loc.m[k] * x[static_cast<std::size_t>(b)];
+    }
+    y[a] = (1 - theta) * x[a] - s;
+  }
+}
+
+double dot(const std::vector<double>& x, const std::vector<double>& y) {
+  double s = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) s = s + x[i] * y[i];
+  return s;
+}
+
+// Orthogonalises v against the columns q (two classical passes) and returns the coefficients.
+std::vector<double> orthogonalise(std::vector<double>& v, const std::vector<std::vector<double>>& q) {
+  std::vector<double> coef(q.size(), 0.0);
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t j = 0; j < q.size(); ++j) {
+      const double c = dot(q[j], v);
+      coef[j] = coef[j] + c;
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = v[i] - c * q[j][i];
+    }
+  return coef;
+}
+
+// z on the compact rows (zero outside N_h) minimising ||r + (L~ - theta) z|| over the Krylov
+// space of the residual restricted to N_h.
+std::vector<double> local_correction(const Graph& g, const Local& loc, const std::vector<double>& r, double theta,
+                                     std::uint32_t krylov) {
+  const std::size_t rn = loc.rows.size();
+  std::vector<double> z(rn, 0.0);
+  std::vector<double> v(rn, 0.0);
+  for (std::size_t a = 0; a < rn; ++a)
+    if (loc.inner[a]) v[a] = r[a];
+  std::vector<std::vector<double>> basis, qc;  // B (on N_h) and the orthonormalised C = (L - theta) B
+  std::vector<std::vector<double>> rc;         // R of C = Q R, column by column
+  const double v0 = std::sqrt(dot(v, v));
+  if (!(v0 > 0)) return z;
+  std::vector<double> y;
+  for (std::uint32_t j = 0; j < krylov; ++j) {
+    orthogonalise(v, basis);
+    const double nv = std::sqrt(dot(v, v));
+    if (!(nv > 1e-12 * v0)) break;
+    for (double& x : v) x = x / nv;
+    local_apply(g, loc, v, theta, y);
+    std::vector<double> cj = y;
+    std::vector<double> col = orthogonalise(cj, qc);
+    const double nc = std::sqrt(dot(cj, cj));
+    if (!(nc > 1e-12 * std::sqrt(dot(y, y)))) break;
+    for (double& x : cj) x = x / nc;
+    col.push_back(nc);
+    basis.push_back(v);
+    qc.push_back(std::move(cj));
+    rc.push_back(std::move(col));
+    // The next Krylov direction: (L - theta) v restricted to N_h.
+    for (std::size_t a = 0; a < rn; ++a) v[a] = loc.inner[a] ? y[a] : 0.0;
+  }
+  const std::size_t k = basis.size();
+  if (k == 0) return z;
+  // min ||r + Q R d||: R d = -Q^T r, back substitution.
+  std::vector<double> d(k, 0.0);
+  std::vector<double> rhs(k);
+  for (std::size_t j = 0; j < k; ++j) rhs[j] = -dot(qc[j], r);
+  for (std::size_t j = k; j-- > 0;) {
+    double s = rhs[j];
+    for (std::size_t l = j + 1; l < k; ++l) s = s - rc[l][j] * d[l];
+    d[j] = s / rc[j][j];
+  }
+  for (std::size_t j = 0; j < k; ++j)
+    for (std::size_t a = 0; a < rn; ++a) z[a] = z[a] + d[j] * basis[j][a];
+  return z;
+}
+
+// Rayleigh quotients and residual norms of the five columns of u (n x 5, raws scaled by 2^shift)
+// under the operator, exact products and dots (R1-INC-032): theta_c, rho_c (for the unit vector,
+// rounding of the application included) and the scaled norms.
+struct Residuals {
+  std::array<double, 5> theta{}, rho{}, norm{};
+};
+Residuals residuals(const SpectralOperator<Q32>& op, const std::vector<Q32>& u, int shift, bool parallel) {
+  const std::size_t n = op.n;
+  std::vector<Q32> y(n * 5);
+  op.apply_block(u.data(), 5, y.data(), 5, 5, parallel);
+  Residuals out;
+  for (std::size_t c = 0; c < 5; ++c) {
+    fx::ExactSum uu, uy;
+    for (std::size_t i = 0; i < n; ++i) {
+      uu.add_product(u[i * 5 + c], u[i * 5 + c]);
+      uy.add_product(u[i * 5 + c], y[i * 5 + c]);
+    }
+    const double nn = spectral::to_double_scaled(uu, 64), ny = spectral::to_double_scaled(uy, 64);
+    if (!(nn > 0)) {
+      out.theta[c] = 0;
+      out.rho[c] = kInf;
+      continue;
+    }
+    const double theta = ny / nn;
+    double rr = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double e = static_cast<double>(y[i * 5 + c].raw) - theta * static_cast<double>(u[i * 5 + c].raw);
+      rr = rr + e * e;
+    }
+    const double len = std::sqrt(nn);  // value units
+    // Each applied entry is within half a raw of exact: sqrt(n) / 2 raws in all; the fp64 sums
+    // above are within a relative 1e-12 of exact for any n r1 holds.
+    const double apply_err = 0.5 * std::sqrt(static_cast<double>(n)) * 0x1p-32;
+    out.theta[c] = theta;
+    out.rho[c] = (std::sqrt(rr) * 0x1p-32 * (1 + 1e-12) + apply_err) / len;
+    out.norm[c] = len / std::ldexp(1.0, shift);
+  }
+  return out;
+}
+
+// The earlier frame applied to vectors (R1-INC-033): genesis scale, then the stored similarity.
+Result<std::vector<std::array<Q32, 3>>> frame_positions(const Frame& f, const std::array<std::vector<Q32>, 5>& u,
+                                                        std::size_t n) {
+  const auto scale = Q32::checked_from_double(f.scale);
+  if (!scale) return Status::input("the earlier epoch's scale is outside the Q32 range");
+  Similarity sim;
+  const Alignment& a = f.alignment;
+  if (!a.genesis) {
+    for (int k = 0; k < 9; ++k) {
+      const auto q = Q32::checked_from_double(a.scale * a.rotation[static_cast<std::size_t>(k)]);
+      if (!q) return Status::input("the earlier epoch's alignment is outside the Q32 range");
+      sim.m[static_cast<std::size_t>(k)] = *q;
+    }
+    for (int i = 0; i < 3; ++i) {
+      const auto q = Q32::checked_from_double(a.translation[static_cast<std::size_t>(i)]);
+      if (!q) return Status::input("the earlier epoch's alignment is outside the Q32 range");
+      sim.t[static_cast<std::size_t>(i)] = *q;
+    }
+    sim.reflected = a.reflected;
+  }
+  std::vector<std::array<Q32, 3>> pos(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    std::array<Q32, 3> x{};
+    for (std::size_t c = 0; c < 3; ++c) {
+      const auto v = fx::checked_mul(u[c].empty() ? Q32{} : u[c][p], *scale);
+      if (!v) return Status::internal("incremental frame: a coordinate leaves the Q32 range");
+      x[c] = *v;
+    }
+    if (!a.genesis) {
+      const auto y = apply_similarity(sim, x);
+      if (!y) return Status::internal("incremental frame: a position leaves the Q32 range");
+      x = *y;
+    }
+    pos[p] = x;
+  }
+  return pos;
+}
+
+bool same_parameters(const Epoch& prev, const EpochOptions& o) {
+  const TriKernelParams &a = prev.trikernel, &b = o.trikernel;
+  const bool tk = a.lambda_d == b.lambda_d && a.lambda_s == b.lambda_s && a.lambda_h == b.lambda_h &&
+                  a.teleport == b.teleport && a.mu == b.mu && a.tau == b.tau && a.eps == b.eps &&
+                  a.max_steps == b.max_steps && a.chebyshev_degree == b.chebyshev_degree;
+  const SpectralParams &c = prev.spectral_params, &d = o.spectral;
+  return tk && c.rho == d.rho && c.basis == d.basis && c.tolerance == d.tolerance;
+}
+
+std::string fmt(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", x);
+  return b;
+}
+
+}  // namespace
+
+Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
+                             const Snapshot& next, const Graph& g, const EpochOptions& options,
+                             const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
+  if (prev.domain != NumericDomain::kQ32)
+    return Status::input(prev_name + ": an fp64 epoch cannot seed an update (the canonical domain is q32)");
+  R1_ASSIGN(EditBatch batch, edit_batch(prev, next, g, prev_name));
+  const std::size_t n = g.n;
+
+  UpdateInfo info;
+  info.touched = batch.touched.size();
+  info.added = batch.added;
+  info.dropped = batch.dropped;
+  info.delta_norm = batch.delta_norm;
+  info.eps_x = uo.eps * static_cast<double>(kSceneRadius);
+  info.hops = uo.hops ? *uo.hops : hops_for(uo.eps, prev.trikernel.mu.to_double());
+  const UpdateInfo* before = prev.update ? &*prev.update : nullptr;
+  const bool prev_full = before == nullptr || !before->incremental;
+  info.epochs_since_full = (prev_full ? 0 : before->epochs_since_full) + 1;
+  info.delta_norm_since_full = (prev_full ? 0 : before->delta_norm_since_full) + batch.delta_norm;
+  info.resized_since_full = (prev_full ? 0 : before->resized_since_full) + batch.added + batch.dropped;
+  info.full_eigenvalues = prev_full ? prev.spectrum.eigenvalues : before->full_eigenvalues;
+  info.full_residuals = prev_full ? prev.spectrum.residuals : before->full_residuals;
+  info.vector_bound.fill(kInf);
+  info.certificate = kInf;
+
+  // The full solve, aligned to the earlier epoch's anchor (R1-INC-034).
+  auto full = [&](std::string reason) -> Result<Epoch> {
+    EpochOptions o = options;
+    o.anchor = prev_anchor;
+    o.anchor_name = prev_name + "/anchor.bin";
+    R1_ASSIGN(Epoch e, run_epoch(next, g, o, stages, progress));
+    UpdateInfo u = info;
+    u.incremental = false;
+    u.reason = std::move(reason);
+    u.epochs_since_full = 0;
+    u.delta_norm_since_full = 0;
+    u.resized_since_full = 0;
+    u.full_eigenvalues = e.spectrum.eigenvalues;
+    u.full_residuals = e.spectrum.residuals;
+    e.update = u;
+    return e;
+  };
+
+  // Reasons for a full solve that need no work on N_h (R1-INC-030).
+  if (uo.force_full) return full("forced (--full)");
+  if (options.domain != NumericDomain::kQ32) return full("the fp64 domain has no incremental update");
+  if (!same_parameters(prev, options)) return full("parameters differ from the earlier epoch's");
+  if (g.component_size.size() != 1 || prev.spectrum.rho != 0 || prev.components != 1)
+    return full("the graph is not connected: rho > 0 couples every particle");
+  if (prev.spectrum.found < 5 || n < 8) return full("fewer than 5 eigenvectors");
+  if (info.epochs_since_full >= uo.full_every) return full("cadence: " + std::to_string(uo.full_every) + " epochs since the last full solve");
+  if (info.delta_norm_since_full > uo.full_norm)
+    return full("||L~ - L~_full|| bound " + fmt(info.delta_norm_since_full) + " exceeds " + fmt(uo.full_norm));
+
+  const std::vector<std::uint32_t> nh = neighbourhood(g, batch.touched, info.hops);
+  info.region = nh.size();
+  if (2 * nh.size() > n)
+    return full("N_h (" + std::to_string(info.hops) + " hops) holds " + std::to_string(nh.size()) + " of " + std::to_string(n) +
+                " particles");
+
+  // ---- the local update of u_2..u_6 (R1-INC-031) ----
+  auto clock = std::chrono::steady_clock::now();
+  Epoch e = epoch_header(next, g, options);
+  R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
+  const int shift = op.e / 2;  // vectors scaled by 2^shift: the operator's rounding shrinks by as much
+  std::vector<Q32> u(n * 5);
+  for (std::size_t i = 0; i < n; ++i)
+    if (batch.prev_of[i] >= 0)
+      for (std::size_t c = 0; c < 5; ++c)
+        u[i * 5 + c] = Q32::from_raw(prev.spectrum.u[c][static_cast<std::size_t>(batch.prev_of[i])].raw * (std::int64_t{1} << shift));
+  const Residuals before_update = residuals(op, u, shift, options.parallel);
+
+  Local loc;
+  loc.rows = neighbourhood(g, batch.touched, info.hops + 1);
+  loc.where.assign(n, -1);
+  for (std::size_t a = 0; a < loc.rows.size(); ++a) loc.where[loc.rows[a]] = static_cast<std::int32_t>(a);
+  loc.inner.assign(loc.rows.size(), 0);
+  for (std::uint32_t i : nh) loc.inner[static_cast<std::size_t>(loc.where[i])] = 1;
+  loc.m.assign(g.col.size(), 0.0);
+  for (std::uint32_t i : loc.rows)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) loc.m[k] = static_cast<double>(op.m[k].raw) * 0x1p-32;
+
+  std::array<std::vector<Q32>, 5> out;
+  for (std::size_t c = 0; c < 5; ++c) {
+    out[c].resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      out[c][i] = batch.prev_of[i] >= 0 ? prev.spectrum.u[c][static_cast<std::size_t>(batch.prev_of[i])] : Q32{};
+    if (loc.rows.empty()) continue;
+    // The residual on the compact rows, value units of the scaled vector.
+    const double theta = before_update.theta[c];
+    std::vector<double> x(loc.rows.size()), r;
+    for (std::size_t a = 0; a < loc.rows.size(); ++a) x[a] = static_cast<double>(u[loc.rows[a] * 5 + c].raw) * 0x1p-32;
+    {
+      // (L~ - theta) u on the compact rows with every neighbour's value (u is global).
+      r.assign(loc.rows.size(), 0.0);
+      for (std::size_t a = 0; a < loc.rows.size(); ++a) {
+        const std::uint32_t i = loc.rows[a];
+        double s = 0;
+        for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+          s = s + loc.m[k] * static_cast<double>(u[std::size_t{g.col[k]} * 5 + c].raw) * 0x1p-32;
+        r[a] = (1 - theta) * x[a] - s;
+      }
+    }
+    const std::vector<double> z = local_correction(g, loc, r, theta, uo.krylov);
+    // Stored vector: the earlier raw plus the correction, rounded once to the unit-norm scale.
+    const double to_raw = std::ldexp(1.0, 32 - shift);
+    for (std::size_t a = 0; a < loc.rows.size(); ++a) {
+      if (!loc.inner[a]) continue;
+      const double v = std::nearbyint((x[a] + z[a]) * to_raw);
+      if (!(std::fabs(v) < 0x1p62)) return Status::internal("incremental update: a vector entry leaves the Q32 range");
+      out[c][loc.rows[a]] = Q32::from_raw(static_cast<std::int64_t>(v));
+    }
+  }
+
+  // ---- the certificate (R1-INC-032) ----
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < 5; ++c) u[i * 5 + c] = Q32::from_raw(out[c][i].raw * (std::int64_t{1} << shift));
+  const Residuals after = residuals(op, u, shift, options.parallel);
+  // lambda_i(L~_next) lies within rho_i^full + sum ||Delta L~|| of the full solve's value (Weyl).
+  std::array<double, 6> lo{}, hi{};
+  for (std::size_t i = 0; i < 6; ++i) {
+    lo[i] = info.full_eigenvalues[i] - info.full_residuals[i] - info.delta_norm_since_full;
+    hi[i] = info.full_eigenvalues[i] + info.full_residuals[i] + info.delta_norm_since_full;
+  }
+  // Particles added or dropped pad the operators with eigenvalue 1 (R1-INC-032): harmless while
+  // every wanted eigenvalue stays below it.
+  const bool padded_ok = info.resized_since_full == 0 || hi[5] < 1;
+  for (std::size_t c = 0; c < 4 && padded_ok; ++c) {
+    const double theta = after.theta[c], rho = after.rho[c];
+    const double gap = std::min(theta - hi[c], lo[c + 2] - theta);
+    if (!(gap > 0) || !std::isfinite(rho)) continue;
+    info.vector_bound[c] = std::sqrt(2.0) * std::min(1.0, rho / gap) + std::fabs(after.norm[c] - 1);
+  }
+  const double s_total = prev.frame.scale * (prev.frame.alignment.genesis ? 1.0 : prev.frame.alignment.scale);
+  const double b2 = info.vector_bound[0] * info.vector_bound[0] + info.vector_bound[1] * info.vector_bound[1] +
+                    info.vector_bound[2] * info.vector_bound[2];
+  info.certificate = std::isfinite(b2) ? s_total * std::sqrt(b2) + 1e-6 : kInf;
+  if (!(info.certificate <= info.eps_x))
+    return full(std::isfinite(info.certificate)
+                    ? "certificate " + fmt(info.certificate) + " exceeds eps_X " + fmt(info.eps_x)
+                    : std::string(padded_ok ? "no certificate: an updated eigenvalue is not separated from its neighbours"
+                                            : "no certificate: particles changed and an eigenvalue bound reaches 1"));
+
+  // ---- the incremental epoch ----
+  Spectrum<Q32>& s = e.spectrum;
+  s.n = static_cast<std::uint32_t>(n);
+  s.rho = 0;
+  s.found = prev.spectrum.found;
+  s.eigenvalues[0] = info.full_eigenvalues[0];
+  s.residuals[0] = info.full_residuals[0] + info.delta_norm_since_full;
+  for (std::size_t c = 0; c < 5; ++c) {
+    s.eigenvalues[c + 1] = after.theta[c];
+    s.residuals[c + 1] = after.rho[c];
+  }
+  s.u = std::move(out);
+  s.matvecs = 10;  // two block applications for the residuals
+  s.passes = 2;
+  e.timings.push_back({std::string(stage_name(Stage::kSpectral)),
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count()});
+  clock = std::chrono::steady_clock::now();
+  const double lambda2 = s.eigenvalues[1];
+  R1_ASSIGN(e.focus, stages.focus(g, options, lambda2, progress));
+  const auto t_focus = std::chrono::steady_clock::now();
+  e.timings.push_back({std::string(stage_name(Stage::kFocus)), std::chrono::duration<double>(t_focus - clock).count()});
+  // The earlier frame, kept (R1-INC-033): outside N_h every position keeps its bits.
+  e.frame.scale = prev.frame.scale;
+  e.frame.alignment = prev.frame.alignment;
+  R1_ASSIGN(e.frame.position, frame_positions(prev.frame, s.u, n));
+  e.timings.push_back({std::string(stage_name(Stage::kFrame)),
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_focus).count()});
+  R1_TRY(epoch_tail(e, next, g, options, stages, progress));
+  info.incremental = true;
+  e.update = info;
+  return e;
+}
+
+}  // namespace r1

@@ -1,0 +1,270 @@
+// Incremental epochs (spec/incremental.md R1-INC-001..040): the edit batch against a dense
+// oracle of ||Delta L~||_2, N_h, h, the certificate against the exact eigenvectors of a dense
+// solve (Eigen), frozen positions outside N_h, the fall-back and its reasons.
+#include "r1/reference/incremental.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <functional>
+
+#include "r1/reference/edits.hpp"
+#include "r1/reference/epoch.hpp"
+#include "r1/reference/epoch_io.hpp"
+#include "r1/reference/frame.hpp"
+#include "r1/reference/generate.hpp"
+#include "r1/reference/graph_build.hpp"
+#include "r1/solvers/spectral.hpp"
+
+namespace {
+
+r1::Snapshot rgg(std::int64_t n, std::uint64_t seed = 1) {
+  r1::GenParams p;
+  p.kind = r1::GenKind::kRgg;
+  p.n = n;
+  p.seed = seed;
+  auto s = r1::generate(p);
+  EXPECT_TRUE(s.is_ok()) << s.status().message();
+  return std::move(*s);
+}
+
+r1::Snapshot edited(const r1::Snapshot& s, const std::string& edits) {
+  auto e = r1::parse_edits(edits, "batch");
+  EXPECT_TRUE(e.is_ok()) << e.status().message();
+  auto r = r1::apply_edits(s, *e, "batch");
+  EXPECT_TRUE(r.is_ok()) << r.status().message();
+  return std::move(*r);
+}
+
+r1::Graph graph(const r1::Snapshot& s) {
+  auto g = r1::build_graph(s);
+  EXPECT_TRUE(g.is_ok()) << g.status().message();
+  return std::move(*g);
+}
+
+r1::Epoch full_epoch(const r1::Snapshot& s) {
+  const r1::Graph g = graph(s);
+  auto e = r1::run_epoch(s, g, r1::EpochOptions{});
+  EXPECT_TRUE(e.is_ok()) << e.status().message();
+  return std::move(*e);
+}
+
+// The operator the solver iterates on, dense, from its exact Q32 entries (raws are exact doubles).
+Eigen::MatrixXd dense_operator(const r1::Graph& g) {
+  auto op = r1::spectral_operator_q32(g, r1::SpectralParams{});
+  EXPECT_TRUE(op.is_ok());
+  Eigen::MatrixXd l = Eigen::MatrixXd::Identity(g.n, g.n);
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+      l(i, g.col[k]) -= static_cast<double>(op->m[k].raw) * 0x1p-32;
+  return l;
+}
+
+// The exact normalised-adjacency entries w / sqrt(d_i d_j) of a graph, dense.
+Eigen::MatrixXd dense_m(const r1::Graph& g) {
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(g.n, g.n);
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+      m(i, g.col[k]) = static_cast<double>(g.w[k]) /
+                       std::sqrt(static_cast<double>(g.degree[i]) * static_cast<double>(g.degree[g.col[k]]));
+  return m;
+}
+
+TEST(Incremental, HopsMeetTheYukawaTailAndAreTheLeastThatDo) {
+  EXPECT_EQ(r1::hops_for(1e-3, 1.0), 9u);
+  for (double mu : {0.25, 0.5, 1.0, 2.0, 7.5})
+    for (double eps : {0.3, 1e-2, 1e-3, 1e-6}) {
+      const std::uint32_t h = r1::hops_for(eps, mu);
+      ASSERT_GE(h, 1u);
+      if (h == 64) continue;  // the cap
+      EXPECT_GE(mu * std::pow(1 + mu, h + 1) * eps, 1.0 - 1e-12) << mu << " " << eps;
+      if (h > 1) {
+        EXPECT_LT(mu * std::pow(1 + mu, h) * eps, 1.0 + 1e-12) << mu << " " << eps;
+      }
+    }
+}
+
+TEST(Incremental, NeighbourhoodIsTheBallOfHHops) {
+  r1::GenParams p;
+  p.kind = r1::GenKind::kPath;
+  p.n = 20;
+  const r1::Graph g = graph(*r1::generate(p));
+  EXPECT_EQ(r1::neighbourhood(g, {5}, 2), (std::vector<std::uint32_t>{3, 4, 5, 6, 7}));
+  EXPECT_EQ(r1::neighbourhood(g, {0, 19}, 1), (std::vector<std::uint32_t>{0, 1, 18, 19}));
+  EXPECT_EQ(r1::neighbourhood(g, {}, 3), std::vector<std::uint32_t>{});
+}
+
+TEST(Incremental, TouchedRowsAndTheNormBoundAgainstADenseOracle) {
+  const r1::Snapshot s = rgg(300);
+  const r1::Epoch prev = full_epoch(s);
+  const std::string a = s.names[s.links[0].from], b = s.names[s.links[0].to];
+  const std::string c = s.names[s.links[7].from], d = s.names[s.links[7].to];
+  for (const std::string& batch :
+       {"reweight\t" + a + "\t" + b + "\t0.5\n", "reweight\t" + c + "\t" + d + "\t0.125\nadd\t" + a + "\t" + d + "\t0.25\n"}) {
+    const r1::Snapshot next = edited(s, batch);
+    const r1::Graph g = graph(next);
+    auto batch_r = r1::edit_batch(prev, next, g, "prev");
+    ASSERT_TRUE(batch_r.is_ok()) << batch_r.status().message();
+    // Touched: exactly the rows that differ (the same particle order here: no particle moved).
+    ASSERT_EQ(next.particles, s.particles);
+    const r1::Graph g0 = graph(s);
+    std::vector<std::uint32_t> want;
+    for (std::uint32_t i = 0; i < g.n; ++i) {
+      const bool same = g.row_ptr[i + 1] - g.row_ptr[i] == g0.row_ptr[i + 1] - g0.row_ptr[i] &&
+                        std::equal(g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i]),
+                                   g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i + 1]),
+                                   g0.col.begin() + static_cast<std::ptrdiff_t>(g0.row_ptr[i])) &&
+                        std::equal(g.w.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i]),
+                                   g.w.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i + 1]),
+                                   g0.w.begin() + static_cast<std::ptrdiff_t>(g0.row_ptr[i]));
+      if (!same) want.push_back(i);
+    }
+    EXPECT_EQ(batch_r->touched, want);
+    // The bound holds for the operators' true difference (rounded entries included) and for the
+    // exact entries, and is not looser than the Frobenius norm plus the rounding allowance.
+    const Eigen::MatrixXd dl = dense_operator(g) - dense_operator(g0);
+    const Eigen::MatrixXd dm = dense_m(g) - dense_m(g0);
+    auto norm2 = [](const Eigen::MatrixXd& x) {
+      return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(x).eigenvalues().cwiseAbs().maxCoeff();
+    };
+    EXPECT_GE(batch_r->delta_norm, norm2(dl));
+    EXPECT_GE(batch_r->delta_norm, norm2(dm));
+    EXPECT_LE(batch_r->delta_norm, dm.norm() + 1e-6);
+  }
+}
+
+TEST(Incremental, AddedDroppedAndAnotherChain) {
+  const r1::Snapshot s = rgg(1500);
+  const r1::Epoch prev = full_epoch(s);
+  // A new particle, and one that loses every link (the last in canonical order: not an anchor).
+  std::string batch = "add\t" + s.names[3] + "\tnewcomer\n";
+  const std::string lone = s.names.back();
+  for (const r1::Link& l : s.links)
+    if (s.names[l.from] == lone || s.names[l.to] == lone) batch += "remove\t" + s.names[l.from] + "\t" + s.names[l.to] + "\n";
+  const r1::Snapshot next = edited(s, batch);
+  auto b = r1::edit_batch(prev, next, graph(next), "prev");
+  ASSERT_TRUE(b.is_ok()) << b.status().message();
+  EXPECT_EQ(b->added, 1u);
+  EXPECT_EQ(b->dropped, 1u);
+  EXPECT_EQ(b->prev_of[next.particles.size() - 1], -1);
+
+  r1::GenParams p;
+  p.kind = r1::GenKind::kRing;
+  p.n = 50;
+  const r1::Snapshot other = *r1::generate(p);
+  auto bad = r1::edit_batch(prev, other, graph(other), "prev");
+  ASSERT_FALSE(bad.is_ok());
+  EXPECT_NE(bad.status().message().find("prev: not an epoch of this snapshot's chain: its anchor particle 0"), std::string::npos)
+      << bad.status().message();
+}
+
+struct UpdateRun {
+  r1::Snapshot s, next;
+  r1::Epoch prev, epoch;
+  r1::Graph g;
+};
+
+// PREV = the full epoch of an rgg graph; NEXT = it with the batch `make(s)`, from PREV.
+UpdateRun incremental_run(const std::function<std::string(const r1::Snapshot&)>& make, const r1::UpdateOptions& uo) {
+  UpdateRun r;
+  r.s = rgg(1000, 3);
+  r.prev = full_epoch(r.s);
+  r.next = edited(r.s, make(r.s));
+  r.g = graph(r.next);
+  const r1::Anchor anchor = r1::make_anchor(r.s, r.prev.frame);
+  r1::ReferenceStages stages;
+  auto e = r1::run_epoch_from(r.prev, anchor, "prev", r.next, r.g, r1::EpochOptions{}, uo, stages);
+  EXPECT_TRUE(e.is_ok()) << e.status().message();
+  if (e.is_ok()) r.epoch = std::move(*e);
+  return r;
+}
+
+// A reweight of one link (below the largest weight, so no other row rescales).
+std::string reweight(const r1::Snapshot& s, const char* w) {
+  return "reweight\t" + s.names[s.links[10].from] + "\t" + s.names[s.links[10].to] + "\t" + w + "\n";
+}
+std::string small_reweight(const r1::Snapshot& s) { return reweight(s, "0.999"); }
+
+TEST(Incremental, CertifiedUpdateBoundsTheExactEigenvectorsAndFreezesTheRest) {
+  r1::UpdateOptions uo;
+  uo.hops = 3;
+  const UpdateRun r = incremental_run(small_reweight, uo);
+  ASSERT_TRUE(r.epoch.update.has_value());
+  const r1::UpdateInfo& u = *r.epoch.update;
+  ASSERT_TRUE(u.incremental) << u.reason;
+  EXPECT_EQ(u.touched, 2u);
+  EXPECT_EQ(u.epochs_since_full, 1u);
+  EXPECT_LE(u.certificate, u.eps_x);
+  const std::vector<std::uint32_t> nh = r1::neighbourhood(r.g, {r.next.links[10].from, r.next.links[10].to}, 3);
+  EXPECT_EQ(u.region, nh.size());
+  std::vector<char> in(r.g.n, 0);
+  for (std::uint32_t i : nh) in[i] = 1;
+  // Outside N_h: the earlier vectors and positions, bit for bit; inside, some moved.
+  std::size_t moved = 0;
+  for (std::uint32_t i = 0; i < r.g.n; ++i) {
+    if (in[i]) {
+      moved += r.epoch.frame.position[i] != r.prev.frame.position[i];
+      continue;
+    }
+    ASSERT_EQ(r.epoch.frame.position[i], r.prev.frame.position[i]) << i;
+    for (std::size_t c = 0; c < 5; ++c) ASSERT_EQ(r.epoch.spectrum.u[c][i], r.prev.spectrum.u[c][i]);
+  }
+  EXPECT_GT(moved, 0u);
+  // The exact eigenvectors of the operator (dense, Eigen): each updated vector lies within its
+  // bound of the sign-matched one.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense_operator(r.g));
+  for (std::size_t c = 0; c < 4; ++c) {
+    Eigen::VectorXd x(r.g.n);
+    for (std::uint32_t i = 0; i < r.g.n; ++i) x[i] = r.epoch.spectrum.u[c][i].to_double();
+    Eigen::VectorXd star = eig.eigenvectors().col(static_cast<Eigen::Index>(c + 1));
+    if (x.dot(star) < 0) star = -star;
+    const double err = (x - star).norm();
+    EXPECT_LE(err, u.vector_bound[c]) << "u_" << c + 2;
+    EXPECT_NEAR(r.epoch.spectrum.eigenvalues[c + 1], eig.eigenvalues()[static_cast<Eigen::Index>(c + 1)], 1e-9);
+  }
+  // The position certificate is the vector bounds through the frame's scale.
+  const double s = r.prev.frame.scale * (r.prev.frame.alignment.genesis ? 1.0 : r.prev.frame.alignment.scale);
+  EXPECT_NEAR(u.certificate,
+              s * std::sqrt(u.vector_bound[0] * u.vector_bound[0] + u.vector_bound[1] * u.vector_bound[1] +
+                            u.vector_bound[2] * u.vector_bound[2]) + 1e-6,
+              1e-9 * u.certificate);
+  // The same inputs, the same bytes.
+  const UpdateRun again = incremental_run(small_reweight, uo);
+  EXPECT_EQ(*r1::epoch_files(again.epoch), *r1::epoch_files(r.epoch));
+}
+
+TEST(Incremental, FullSolveWhenTheCertificateFailsOrTheCadenceSaysSo) {
+  // A 1% reweight moves u_2..u_4 by more than the local update can follow within eps_X.
+  r1::UpdateOptions uo;
+  uo.hops = 3;
+  const UpdateRun big = incremental_run([](const r1::Snapshot& s) { return reweight(s, "0.99"); }, uo);
+  ASSERT_TRUE(big.epoch.update.has_value());
+  EXPECT_FALSE(big.epoch.update->incremental);
+  EXPECT_EQ(big.epoch.update->reason.rfind("certificate ", 0), 0u) << big.epoch.update->reason;
+  EXPECT_EQ(big.epoch.update->epochs_since_full, 0u);
+  EXPECT_EQ(big.epoch.update->full_eigenvalues, big.epoch.spectrum.eigenvalues);
+  // The full solve is the epoch aligned to the earlier anchor, byte for byte.
+  r1::EpochOptions o;
+  o.anchor = r1::make_anchor(big.s, big.prev.frame);
+  o.anchor_name = "prev/anchor.bin";
+  auto plain = r1::run_epoch(big.next, big.g, o);
+  ASSERT_TRUE(plain.is_ok());
+  EXPECT_EQ(*r1::epoch_files(*plain), *r1::epoch_files(big.epoch));
+  // Removing a link between low-degree particles moves the operator by more than R-1.0's 0.05.
+  const UpdateRun cut = incremental_run(
+      [](const r1::Snapshot& s) { return "remove\t" + s.names[s.links[0].from] + "\t" + s.names[s.links[0].to] + "\n"; }, uo);
+  EXPECT_EQ(cut.epoch.update->reason.find("||L~ - L~_full|| bound "), 0u) << cut.epoch.update->reason;
+
+  r1::UpdateOptions every;
+  every.hops = 3;
+  every.full_every = 1;
+  const UpdateRun cadence = incremental_run(small_reweight, every);
+  EXPECT_EQ(cadence.epoch.update->reason, "cadence: 1 epochs since the last full solve");
+  r1::UpdateOptions wide;  // the default h = 9 covers most of a 1000-particle rgg graph
+  const UpdateRun covered = incremental_run(small_reweight, wide);
+  EXPECT_EQ(covered.epoch.update->hops, 9u);
+  EXPECT_NE(covered.epoch.update->reason.find("N_h (9 hops) holds"), std::string::npos) << covered.epoch.update->reason;
+}
+
+}  // namespace

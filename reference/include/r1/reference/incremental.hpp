@@ -1,0 +1,57 @@
+// Incremental epochs (R-1.0 3.3; spec/incremental.md R1-INC-001..050): the edit batch between an
+// earlier epoch and the next snapshot, the h-hop neighbourhood N_h, the local update of u_2..u_6
+// with its a-posteriori certificate, and the decision to solve in full instead.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "r1/spec/epoch.hpp"
+#include "r1/spec/epoch_options.hpp"
+#include "r1/spec/graph.hpp"
+#include "r1/spec/progress.hpp"
+#include "r1/spec/snapshot.hpp"
+#include "r1/spec/stages.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1 {
+
+struct UpdateOptions {
+  double eps = 1e-3;                    // eps_X / R_scene (R1-INC-020)
+  std::optional<std::uint32_t> hops;    // h; unset: the rule of R1-INC-020
+  std::uint32_t full_every = 64;        // a full solve at least every this many epochs (R1-INC-030)
+  double full_norm = 0.05;              // ... or when the summed ||Delta L~|| bound exceeds this
+  std::uint32_t krylov = 12;            // local basis vectors per eigenvector (R1-INC-031)
+  bool force_full = false;              // always solve in full (r1 drift's oracle side)
+};
+
+// The edit batch at the level of the layout graph (R1-INC-010..013).
+struct EditBatch {
+  std::vector<std::int64_t> prev_of;       // per next particle: its index in the earlier epoch, or -1 (new)
+  std::vector<std::uint32_t> touched;      // next particles whose A_sym / A2 row changed, ascending
+  std::uint64_t added = 0, dropped = 0;
+  double delta_norm = 0;                   // bound on ||L~_next - L~_prev||_2 (R1-INC-012)
+  bool same_scale = true;                  // the Q32 weight normalisation is unchanged
+};
+
+// Compares the earlier epoch's layout graph (its edges.bin) with the next snapshot's. Input error
+// when the earlier epoch is not of this chain (an anchor particle of it is missing, R1-INC-002).
+Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& graph, const std::string& prev_name);
+
+// h of R1-INC-020 for eps and the springs screening mu.
+std::uint32_t hops_for(double eps, double mu);
+
+// Particles within h hops of `seeds` in A_sym, ascending (R1-INC-021).
+std::vector<std::uint32_t> neighbourhood(const Graph& graph, const std::vector<std::uint32_t>& seeds, std::uint32_t h);
+
+// The epoch of `next` from `prev` (R1-INC-001..050): incremental when the batch allows it and the
+// certificate holds, else every stage in full with the earlier epoch's anchor. `prev_anchor` is
+// the earlier epoch's anchor file (as read); `options` must be the earlier epoch's parameters for
+// an incremental update (else: a full solve, the reason recorded).
+Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
+                             const Snapshot& next, const Graph& graph, const EpochOptions& options,
+                             const UpdateOptions& update, EpochStages& stages, const ProgressFn& progress = {});
+
+}  // namespace r1
