@@ -20,6 +20,7 @@ void add_hash(CLI::App& app, Runner& selected);
 void add_info(CLI::App& app, Runner& selected);
 void add_convert(CLI::App& app, Runner& selected);
 void add_edit(CLI::App& app, Runner& selected);
+void add_drift(CLI::App& app, Runner& selected);
 void add_gen(CLI::App& app, Runner& selected);
 void add_export(CLI::App& app, Runner& selected);
 void add_epoch(CLI::App& app, Runner& selected);

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   r1::cli::add_info(app, selected);
   r1::cli::add_convert(app, selected);
   r1::cli::add_edit(app, selected);
+  r1::cli::add_drift(app, selected);
   r1::cli::add_epoch(app, selected);
   r1::cli::add_export(app, selected);
   r1::cli::add_spectrum(app, selected);

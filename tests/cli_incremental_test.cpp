@@ -1,0 +1,130 @@
+// r1 epoch --from and r1 drift (spec/incremental.md R1-INC-001..040, spec/drift.md R1-DRF-001..030):
+// the update record, the same bytes on the cpu backend, bad input with one line and nothing
+// written, and the drift report with its certificate check.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using r1::test::run_cli;
+
+// An rgg graph whose lambda_2..4 are separated: a small reweight is certified at h = 3.
+struct Chain {
+  r1::test::TempDir d;
+  fs::path g, next, prev;
+  Chain() {
+    g = d / "g.tsv";
+    next = d / "next.graph";
+    prev = d / "prev.epoch";
+    EXPECT_EQ(run_cli({"gen", "rgg", "--n", "1000", "--seed", "3", "-o", g.string()}).exit_code, 0);
+    r1::test::write_file(d / "batch.txt", "reweight\trgg/1\trgg/847\t0.999\n");
+    EXPECT_EQ(run_cli({"edit", g.string(), (d / "batch.txt").string(), "-o", next.string()}).exit_code, 0);
+    EXPECT_EQ(run_cli({"epoch", g.string(), "--no-timings", "-q", "-o", prev.string()}).exit_code, 0);
+  }
+};
+
+json manifest(const fs::path& dir) { return json::parse(r1::test::read_file(dir / "manifest.json")); }
+
+TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
+  Chain c;
+  const auto r = run_cli({"epoch", c.next.string(), "--from", c.prev.string(), "--hops", "3", "--no-timings", "-o",
+                          (c.d / "inc").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("update             incremental: 2 touched"), std::string::npos) << r.out;
+  const json u = manifest(c.d / "inc").at("update");
+  EXPECT_EQ(u.at("mode"), "incremental");
+  EXPECT_EQ(u.at("hops"), 3);
+  EXPECT_LE(u.at("certificate").get<double>(), u.at("eps_x").get<double>());
+  EXPECT_EQ(u.at("vector_bound").at(4), nullptr);
+  // The chain goes on: the next update reads the record (epochs since the full solve: 2).
+  const auto again = run_cli({"epoch", c.next.string(), "--from", (c.d / "inc").string(), "--hops", "3", "--no-timings",
+                              "-q", "-o", (c.d / "inc2").string()});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(manifest(c.d / "inc2").at("update").at("epochs_since_full"), 2);
+  // The cpu backend: the same directory.
+  ASSERT_EQ(run_cli({"epoch", c.next.string(), "--from", c.prev.string(), "--hops", "3", "--backend", "cpu", "--no-timings",
+                     "-q", "-o", (c.d / "cpu").string()})
+                .exit_code,
+            0);
+  for (const auto& f : fs::directory_iterator(c.d / "inc"))
+    EXPECT_EQ(r1::test::read_file(f.path()), r1::test::read_file(c.d / "cpu" / f.path().filename())) << f.path().filename();
+  // --full: the full solve aligned to the earlier anchor, with the reason.
+  ASSERT_EQ(run_cli({"epoch", c.next.string(), "--from", c.prev.string(), "--full", "--no-timings", "-q", "-o",
+                     (c.d / "full").string()})
+                .exit_code,
+            0);
+  EXPECT_EQ(manifest(c.d / "full").at("update").at("reason"), "forced (--full)");
+  EXPECT_FALSE(manifest(c.d / "full").at("alignment").at("genesis").get<bool>());
+}
+
+TEST(CliIncremental, BadInputIsOneLineExitTwoAndNothingWritten) {
+  Chain c;
+  r1::test::TempDir out;
+  // A truncated epoch: one file shorter than its manifest says.
+  fs::copy(c.prev, c.d / "cut.epoch");
+  const std::string pos = r1::test::read_file(c.d / "cut.epoch" / "positions.q32");
+  r1::test::write_file(c.d / "cut.epoch" / "positions.q32", pos.substr(0, pos.size() / 2));
+  // An epoch of another chain.
+  ASSERT_EQ(run_cli({"gen", "ring", "--n", "50", "-o", (c.d / "ring.tsv").string()}).exit_code, 0);
+  ASSERT_EQ(run_cli({"epoch", (c.d / "ring.tsv").string(), "-q", "-o", (c.d / "ring.epoch").string()}).exit_code, 0);
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--from", (c.d / "none").string()}, "none: not an epoch directory"},
+      {{"--from", (c.d / "cut.epoch").string()}, "positions.q32"},
+      {{"--from", (c.d / "ring.epoch").string()}, "not an epoch of this snapshot's chain"},
+      {{"--hops", "3"}, "need --from"},
+      {{"--from", c.prev.string(), "--anchor", (c.prev / "anchor.bin").string()}, "leave out --anchor"},
+      {{"--from", c.prev.string(), "--eps-x", "2"}, "--eps-x must lie in (0, 1)"},
+      {{"--from", c.prev.string(), "--hops", "65"}, "--hops must be at most 64"},
+  };
+  for (const auto& [extra, want] : cases) {
+    std::vector<std::string> args = {"epoch", c.next.string(), "-o", (out / "e").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_cli(args);
+    EXPECT_EQ(r.exit_code, 2) << want << ": " << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+    EXPECT_NE(r.err.find(want), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::is_empty(out.path())) << want;
+  }
+}
+
+TEST(CliDrift, ReportsIncrementalAgainstFullAndChecksTheCertificate) {
+  Chain c;
+  auto drift = [&](const std::string& dir) {
+    return run_cli({"drift", c.g.string(), "--epochs", "3", "--batch", "2", "--kind", "reweight", "--scale", "0.002",
+                    "--hops", "3", "-o", (c.d / dir).string()});
+  };
+  const auto r = drift("d1");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("0 violations"), std::string::npos) << r.out;
+  const json j = json::parse(r1::test::read_file(c.d / "d1" / "drift.json"));
+  EXPECT_EQ(j.at("format"), "r1-drift");
+  ASSERT_EQ(j.at("epochs").size(), 3u);
+  std::size_t checked = 0;
+  for (const json& e : j.at("epochs")) {
+    if (e.at("mode") != "incremental") continue;
+    EXPECT_EQ(e.at("check"), "ok");
+    EXPECT_LE(e.at("true_drift").get<double>(), e.at("certificate").get<double>() + e.at("full_error").get<double>());
+    ++checked;
+  }
+  EXPECT_GT(checked, 0u) << r.out;
+  EXPECT_TRUE(fs::exists(c.d / "d1" / "drift.png"));
+  const std::string table = r1::test::read_file(c.d / "d1" / "drift.tsv");
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 4);
+  // The same seed, the same batches and results (times aside).
+  ASSERT_EQ(drift("d2").exit_code, 0);
+  json a = j, b = json::parse(r1::test::read_file(c.d / "d2" / "drift.json"));
+  for (json* x : {&a, &b})
+    for (json& e : x->at("epochs")) e.erase("seconds_incremental"), e.erase("seconds_full");
+  EXPECT_EQ(a, b);
+  const auto bad = run_cli({"drift", c.g.string(), "--kind", "swap"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--kind 'swap' is not add, remove, reweight or mixed"), std::string::npos) << bad.err;
+}
+
+}  // namespace
