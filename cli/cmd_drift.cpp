@@ -117,21 +117,6 @@ std::vector<Edit> draw_batch(const Snapshot& s, const DriftOptions& o, std::uint
   return out;
 }
 
-// The full solve's own bound on ||u - u*|| for u_2..u_4 in scene units (R1-DRF-020): the same
-// Davis-Kahan argument on its own eigenvalues and residuals.
-double full_error(const Epoch& f, double s) {
-  double sum = 0;
-  for (std::size_t c = 0; c < 3; ++c) {
-    const auto& ev = f.spectrum.eigenvalues;
-    const auto& rs = f.spectrum.residuals;
-    const double gap = std::min(ev[c + 1] - ev[c] - rs[c], ev[c + 2] - rs[c + 2] - ev[c + 1]);
-    if (!(gap > 0)) return kInf;
-    const double b = std::sqrt(2.0) * std::min(1.0, rs[c + 1] / gap);
-    sum += b * b;
-  }
-  return s * std::sqrt(sum);
-}
-
 Row compare(std::uint32_t k, const Epoch& inc, const Epoch& full, double t_inc, double t_full) {
   Row r;
   r.epoch = k;
@@ -162,25 +147,9 @@ Row compare(std::uint32_t k, const Epoch& inc, const Epoch& full, double t_inc, 
     r.check = "-";
     return r;
   }
-  // The certified quantity: the vectors, sign-matched, through the frame's scale (R1-INC-032).
-  const double s = inc.frame.scale * (inc.frame.alignment.genesis ? 1.0 : inc.frame.alignment.scale);
-  double d2 = 0;
-  for (std::size_t c = 0; c < 3; ++c) {
-    double dot = 0, a2 = 0, b2 = 0;
-    for (std::size_t p = 0; p < n; ++p) {
-      const double a = inc.spectrum.u[c][p].to_double(), b = full.spectrum.u[c][p].to_double();
-      dot += a * b, a2 += a * a, b2 += b * b;
-    }
-    const double sign = dot < 0 ? -1.0 : 1.0;
-    double e = 0;
-    for (std::size_t p = 0; p < n; ++p) {
-      const double d = inc.spectrum.u[c][p].to_double() - sign * full.spectrum.u[c][p].to_double();
-      e += d * d;
-    }
-    d2 += e;
-  }
-  r.true_drift = s * std::sqrt(d2);
-  r.full_error = full_error(full, s);
+  // The certified quantity against the full solve's stored vectors (R1-INC-032, R1-DRF-020).
+  r.true_drift = vector_drift(inc, full);
+  r.full_error = full_solve_bound(full, frame_scale(inc.frame));
   if (!std::isfinite(r.full_error)) {
     r.check = "unchecked";
   } else {

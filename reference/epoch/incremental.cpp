@@ -396,6 +396,38 @@ std::string fmt(double x) {
 
 }  // namespace
 
+double frame_scale(const Frame& f) { return f.scale * (f.alignment.genesis ? 1.0 : f.alignment.scale); }
+
+double vector_drift(const Epoch& a, const Epoch& b) {
+  const std::size_t n = a.ids.size();
+  if (b.ids.size() != n) return kInf;
+  double d2 = 0;
+  for (std::size_t c = 0; c < 3; ++c) {
+    if (a.spectrum.u[c].size() != n || b.spectrum.u[c].size() != n) return kInf;
+    double dot = 0;
+    for (std::size_t p = 0; p < n; ++p) dot = dot + a.spectrum.u[c][p].to_double() * b.spectrum.u[c][p].to_double();
+    const double sign = dot < 0 ? -1.0 : 1.0;
+    for (std::size_t p = 0; p < n; ++p) {
+      const double d = a.spectrum.u[c][p].to_double() - sign * b.spectrum.u[c][p].to_double();
+      d2 = d2 + d * d;
+    }
+  }
+  return frame_scale(a.frame) * std::sqrt(d2);
+}
+
+double full_solve_bound(const Epoch& f, double s) {
+  const auto& ev = f.spectrum.eigenvalues;
+  const auto& rs = f.spectrum.residuals;
+  double sum = 0;
+  for (std::size_t c = 0; c < 3; ++c) {
+    const double gap = std::min(ev[c + 1] - ev[c] - rs[c], ev[c + 2] - rs[c + 2] - ev[c + 1]);
+    if (!(gap > 0)) return kInf;
+    const double b = std::sqrt(2.0) * std::min(1.0, rs[c + 1] / gap);
+    sum = sum + b * b;
+  }
+  return s * std::sqrt(sum);
+}
+
 Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
@@ -529,7 +561,7 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
     if (!(gap > 0) || !std::isfinite(rho)) continue;
     info.vector_bound[c] = std::sqrt(2.0) * std::min(1.0, rho / gap) + std::fabs(after.norm[c] - 1);
   }
-  const double s_total = prev.frame.scale * (prev.frame.alignment.genesis ? 1.0 : prev.frame.alignment.scale);
+  const double s_total = frame_scale(prev.frame);
   const double b2 = info.vector_bound[0] * info.vector_bound[0] + info.vector_bound[1] * info.vector_bound[1] +
                     info.vector_bound[2] * info.vector_bound[2];
   info.certificate = std::isfinite(b2) ? s_total * std::sqrt(b2) + 1e-6 : kInf;

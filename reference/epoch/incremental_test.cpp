@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <rapidcheck.h>
 #include <cmath>
 #include <functional>
+#include <set>
 
 #include "r1/reference/edits.hpp"
 #include "r1/reference/epoch.hpp"
@@ -16,14 +18,16 @@
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/solvers/spectral.hpp"
+#include "rc_cases.hpp"
 
 namespace {
 
-r1::Snapshot rgg(std::int64_t n, std::uint64_t seed = 1) {
+r1::Snapshot rgg(std::int64_t n, std::uint64_t seed = 1, std::optional<double> radius = {}) {
   r1::GenParams p;
   p.kind = r1::GenKind::kRgg;
   p.n = n;
   p.seed = seed;
+  p.radius = radius;
   auto s = r1::generate(p);
   EXPECT_TRUE(s.is_ok()) << s.status().message();
   return std::move(*s);
@@ -265,6 +269,59 @@ TEST(Incremental, FullSolveWhenTheCertificateFailsOrTheCadenceSaysSo) {
   const UpdateRun covered = incremental_run(small_reweight, wide);
   EXPECT_EQ(covered.epoch.update->hops, 9u);
   EXPECT_NE(covered.epoch.update->reason.find("N_h (9 hops) holds"), std::string::npos) << covered.epoch.update->reason;
+}
+
+TEST(Incremental, PropertyCertificatesBoundTheExactEigenvectorsAndFocusIsConserved) {
+  // Random rgg graphs and small random reweights: whatever the update decides, an incremental
+  // epoch's vectors lie within their bounds of the dense solve's, focus sums to exactly 1 with
+  // every entry positive, and the same inputs give the same bytes.
+  std::size_t incremental = 0;
+  EXPECT_TRUE(r1::test::check_cases("incremental certificate", 8, [&] {
+    const auto seed = *rc::gen::inRange<std::uint64_t>(1, 1000);
+    const auto links = *rc::gen::container<std::vector<std::size_t>>(*rc::gen::inRange<std::size_t>(1, 4),
+                                                                      rc::gen::inRange<std::size_t>(0, 2000));
+    const auto permille = *rc::gen::inRange(990, 1000);
+    const r1::Snapshot s = rgg(400, seed, 0.25);  // mean degree about 25: connected
+    std::string batch;
+    std::set<std::pair<std::uint32_t, std::uint32_t>> used;
+    for (std::size_t k : links) {
+      const r1::Link& l = s.links[k % s.links.size()];
+      if (!used.insert({l.from, l.to}).second) continue;
+      batch += "reweight\t" + s.names[l.from] + "\t" + s.names[l.to] + "\t0." + std::to_string(permille) + "\n";
+    }
+    RC_LOG() << "rgg 400 radius 0.25 seed " << seed << ": " << batch;
+    const r1::Epoch prev = full_epoch(s);
+    const r1::Snapshot next = edited(s, batch);
+    const r1::Graph g = graph(next);
+    const r1::Anchor anchor = r1::make_anchor(s, prev.frame);
+    r1::ReferenceStages stages;
+    r1::UpdateOptions uo;
+    uo.hops = 3;
+    uo.eps = 0.5;  // accept loose certificates too: the property is that they bound
+    auto e = r1::run_epoch_from(prev, anchor, "prev", next, g, r1::EpochOptions{}, uo, stages);
+    RC_ASSERT(e.is_ok());
+    std::int64_t total = 0;
+    for (const r1::Q32 phi : e->focus.phi) {
+      RC_ASSERT(phi.raw > 0);
+      total += phi.raw;
+    }
+    RC_ASSERT(total == r1::Q32::kOneRaw);
+    auto again = r1::run_epoch_from(prev, anchor, "prev", next, g, r1::EpochOptions{}, uo, stages);
+    RC_ASSERT(again.is_ok());
+    RC_ASSERT(*r1::epoch_files(*again) == *r1::epoch_files(*e));
+    if (!e->update->incremental) return;
+    ++incremental;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense_operator(g));
+    for (std::size_t c = 0; c < 4; ++c) {
+      if (!std::isfinite(e->update->vector_bound[c])) continue;
+      Eigen::VectorXd x(g.n);
+      for (std::uint32_t i = 0; i < g.n; ++i) x[i] = e->spectrum.u[c][i].to_double();
+      Eigen::VectorXd star = eig.eigenvectors().col(static_cast<Eigen::Index>(c + 1));
+      if (x.dot(star) < 0) star = -star;
+      RC_ASSERT((x - star).norm() <= e->update->vector_bound[c]);
+    }
+  }));
+  RecordProperty("incremental_cases", static_cast<int>(incremental));
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "rc_cases.hpp"
 #include "r1/solvers/spectral.hpp"
 #include "spectral_test_support.hpp"
 
@@ -189,19 +190,7 @@ void compare(const r1::Spectrum<Scalar>& s, const Independent& ind, double rho, 
   }
 }
 
-// rc::check with at most `cases` cases (fewer if RC_PARAMS asks), keeping RC_PARAMS's seed: each
-// case solves a graph twice and runs Spectra, and the suite also runs under the sanitizers.
-template <class Fn>
-bool check_cases(const std::string& name, int cases, Fn fn) {
-  rc::detail::TestParams params = rc::detail::configuration().testParams;
-  params.maxSuccess = std::min(params.maxSuccess, cases);
-  rc::detail::TestMetadata meta;
-  meta.id = meta.description = name;
-  const auto result = rc::detail::checkTestable(fn, meta, params);
-  rc::detail::printResultMessage(result, std::cerr);
-  std::cerr << '\n';
-  return result.template is<rc::detail::SuccessResult>();
-}
+using r1::test::check_cases;
 
 TEST(SpectralSpectra, RandomGraphsAgreeWithSpectraAndAcrossDomains) {
   EXPECT_TRUE(check_cases("spectral vs Spectra", 100, [] {

@@ -46,6 +46,17 @@ std::uint32_t hops_for(double eps, double mu);
 // Particles within h hops of `seeds` in A_sym, ascending (R1-INC-021).
 std::vector<std::uint32_t> neighbourhood(const Graph& graph, const std::vector<std::uint32_t>& seeds, std::uint32_t h);
 
+// The certified quantity of R1-INC-032 measured (R1-DRF-020): s (sum_(c=2..4) ||u_c - sigma_c u*_c||^2)^(1/2)
+// between an epoch's stored vectors and another's (sigma_c the sign that matches them), s the
+// first epoch's frame scale (genesis times alignment).
+double vector_drift(const Epoch& a, const Epoch& b);
+// A full solve's own bound on the same quantity for its stored vectors: the certificate's
+// Davis-Kahan argument on its own eigenvalues and residuals, times s; infinity when its wanted
+// eigenvalues are not separated.
+double full_solve_bound(const Epoch& full, double s);
+// The frame scale s of R1-INC-032.
+double frame_scale(const Frame& f);
+
 // The epoch of `next` from `prev` (R1-INC-001..050): incremental when the batch allows it and the
 // certificate holds, else every stage in full with the earlier epoch's anchor. `prev_anchor` is
 // the earlier epoch's anchor file (as read); `options` must be the earlier epoch's parameters for
