@@ -396,15 +396,7 @@ std::string machine() {
   return model + " (" + std::to_string(std::thread::hardware_concurrency()) + " threads)";
 }
 
-bool is_bench_dir(const fs::path& dir) {
-  std::ifstream f(dir / "bench.json");
-  if (!f) return false;
-  try {
-    return json::parse(f).value("format", "") == kBenchFormat;
-  } catch (const json::exception&) {
-    return false;
-  }
-}
+bool is_bench_dir(const fs::path& dir) { return manifest_format_is(dir, kBenchFormat, "bench.json"); }
 
 Status run_bench(const BenchOptions& o) {
   // Everything that can be wrong with the command line is found before any work (R1-BEN-004).

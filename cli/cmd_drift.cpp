@@ -271,22 +271,14 @@ Status write_chart(const std::vector<Row>& rows, double eps_x, const fs::path& p
   return render::write_image(cv.image(), png, srgb(255, 255, 255));
 }
 
-bool is_drift_dir(const fs::path& dir) {
-  std::ifstream f(dir / "drift.json");
-  if (!f) return false;
-  try {
-    return json::parse(f).value("format", "") == kDriftFormat;
-  } catch (const json::exception&) {
-    return false;
-  }
-}
+bool is_drift_dir(const fs::path& dir) { return manifest_format_is(dir, kDriftFormat, "drift.json"); }
 
 Status run_drift(const DriftOptions& o) {
   if (o.epochs == 0 || o.epochs > 100000) return Status::input("drift: --epochs must lie in 1..100000");
   if (o.batch == 0 || o.batch > 1000000) return Status::input("drift: --batch must lie in 1..1000000");
   if (o.kind != "add" && o.kind != "remove" && o.kind != "reweight" && o.kind != "mixed")
     return Status::input("drift: --kind '" + o.kind + "' is not add, remove, reweight or mixed");
-  if (!(o.weight > 0 && o.weight < 0x1p60)) return Status::input("drift: --weight must be a positive number below 2^60");
+  if (!(o.weight >= 0x1p-32 && o.weight < 0x1p30)) return Status::input("drift: --weight must lie in [2^-32, 2^30)");
   if (!(o.scale > 0 && o.scale < 1)) return Status::input("drift: --scale must lie in (0, 1)");
   if (o.eps_x && !(*o.eps_x > 0 && *o.eps_x < 1)) return Status::input("drift: --eps-x must lie in (0, 1)");
   if (o.full_norm && !(*o.full_norm >= 0 && std::isfinite(*o.full_norm)))

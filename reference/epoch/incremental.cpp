@@ -548,9 +548,11 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   const Residuals after = residuals(op, u, shift, options.parallel);
   // lambda_i(L~_next) lies within rho_i^full + sum ||Delta L~|| of the full solve's value (Weyl).
   std::array<double, 6> lo{}, hi{};
+  // 2^-32 more covers the rounding of the products behind the full solve's residuals.
   for (std::size_t i = 0; i < 6; ++i) {
-    lo[i] = info.full_eigenvalues[i] - info.full_residuals[i] - info.delta_norm_since_full;
-    hi[i] = info.full_eigenvalues[i] + info.full_residuals[i] + info.delta_norm_since_full;
+    const double margin = info.full_residuals[i] + info.delta_norm_since_full + 0x1p-32;
+    lo[i] = info.full_eigenvalues[i] - margin;
+    hi[i] = info.full_eigenvalues[i] + margin;
   }
   // Particles added or dropped pad the operators with eigenvalue 1 (R1-INC-032): harmless while
   // every wanted eigenvalue stays below it.

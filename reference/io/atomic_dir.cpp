@@ -92,8 +92,8 @@ Status AtomicDirectory::commit() {
   return fsync_path(parent, parent.string());
 }
 
-bool manifest_format_is(const fs::path& dir, std::string_view format) {
-  std::ifstream f(dir / "manifest.json");
+bool manifest_format_is(const fs::path& dir, std::string_view format, std::string_view file) {
+  std::ifstream f(dir / file);
   if (!f) return false;
   try {
     return nlohmann::json::parse(f).value("format", "") == format;

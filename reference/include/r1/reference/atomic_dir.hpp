@@ -31,8 +31,10 @@ class AtomicDirectory {
   bool committed_ = false;
 };
 
-// True when `dir` holds a manifest.json whose "format" is `format`: the test of whether r1 wrote
-// a directory (an epoch, a golden set) and may replace it.
-bool manifest_format_is(const std::filesystem::path& dir, std::string_view format);
+// True when `dir` holds a JSON `file` (manifest.json unless named) whose "format" is `format`: the
+// test of whether r1 wrote a directory (an epoch, a golden set, a bench or drift report) and may
+// replace it.
+bool manifest_format_is(const std::filesystem::path& dir, std::string_view format,
+                        std::string_view file = "manifest.json");
 
 }  // namespace r1
