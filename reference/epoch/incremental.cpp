@@ -431,8 +431,6 @@ double full_solve_bound(const Epoch& f, double s) {
 Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
-  if (prev.domain != NumericDomain::kQ32)
-    return Status::input(prev_name + ": an fp64 epoch cannot seed an update (the canonical domain is q32)");
   R1_ASSIGN(EditBatch batch, edit_batch(prev, next, g, prev_name));
   const std::size_t n = g.n;
 
@@ -473,7 +471,8 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
 
   // Reasons for a full solve that need no work on N_h (R1-INC-030).
   if (uo.force_full) return full("forced (--full)");
-  if (options.domain != NumericDomain::kQ32) return full("the fp64 domain has no incremental update");
+  if (options.domain != NumericDomain::kQ32 || prev.domain != NumericDomain::kQ32)
+    return full("the fp64 domain has no incremental update");
   if (!same_parameters(prev, options)) return full("parameters differ from the earlier epoch's");
   if (g.component_size.size() != 1 || prev.spectrum.rho != 0 || prev.components != 1)
     return full("the graph is not connected: rho > 0 couples every particle");
@@ -490,9 +489,14 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
 
   // ---- the local update of u_2..u_6 (R1-INC-031) ----
   auto clock = std::chrono::steady_clock::now();
-  Epoch e = epoch_header(next, g, options);
   R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
   const int shift = op.e / 2;  // vectors scaled by 2^shift: the operator's rounding shrinks by as much
+  // Unit vectors have entries of magnitude at most 1 (2^32 raws; a little more after updates): an
+  // epoch whose spectral.q32 says otherwise was not written by r1.
+  for (std::size_t c = 0; c < 5; ++c)
+    for (const Q32 x : prev.spectrum.u[c])
+      if (x.raw > (std::int64_t{1} << 33) || x.raw < -(std::int64_t{1} << 33))
+        return Status::input(prev_name + "/spectral.q32: u_" + std::to_string(c + 2) + " has an entry beyond 2 (not a unit vector)");
   std::vector<Q32> u(n * 5);
   for (std::size_t i = 0; i < n; ++i)
     if (batch.prev_of[i] >= 0)
@@ -574,6 +578,8 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
                                             : "no certificate: particles changed and an eigenvalue bound reaches 1"));
 
   // ---- the incremental epoch ----
+  const double spectral_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  Epoch e = epoch_header(next, g, options);  // the digest: after the decision, which a full solve repeats
   Spectrum<Q32>& s = e.spectrum;
   s.n = static_cast<std::uint32_t>(n);
   s.rho = 0;
@@ -587,8 +593,7 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   s.u = std::move(out);
   s.matvecs = 10;  // two block applications for the residuals
   s.passes = 2;
-  e.timings.push_back({std::string(stage_name(Stage::kSpectral)),
-                       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count()});
+  e.timings.push_back({std::string(stage_name(Stage::kSpectral)), spectral_s});
   clock = std::chrono::steady_clock::now();
   const double lambda2 = s.eigenvalues[1];
   R1_ASSIGN(e.focus, stages.focus(g, options, lambda2, progress));
