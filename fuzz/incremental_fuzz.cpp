@@ -74,7 +74,6 @@ R1_FUZZ_TARGET(incremental) {
   auto first = r1::run_epoch(s, *graph, options, reference);
   if (!first.is_ok()) return 0;  // e.g. an isolated particle: the epoch's own input error
   r1::Epoch prev = std::move(*first);
-  if (std::getenv("R1_FUZZ_TRACE")) std::fprintf(stderr, "graph %zu particles\n", s.particles.size());
   const r1::Anchor anchor = r1::make_anchor(s, prev.frame);
   // eps_X = R_scene / 2 accepts updates whose certificate is loose, so the check that the
   // certificate is a true bound runs on many inputs (small graphs rarely certify at 10^-3).
@@ -96,11 +95,6 @@ R1_FUZZ_TARGET(incremental) {
       if (inc.status().kind() != r1::ErrorKind::kInput) finding("incremental epoch: " + inc.status().message());
       return 0;  // an input error: an anchor particle left (another chain), an isolated particle
     }
-    if (std::getenv("R1_FUZZ_TRACE"))
-      std::fprintf(stderr, "batch %zu: %zu edits, %s %s; touched %zu region %zu dnorm %g cert %g\n", k, batch.size(),
-                   inc->update->incremental ? "incremental" : "full", inc->update->reason.c_str(),
-                   static_cast<std::size_t>(inc->update->touched), static_cast<std::size_t>(inc->update->region),
-                   inc->update->delta_norm, inc->update->certificate);
     // Deterministic: the same inputs, the same bytes.
     auto again = r1::run_epoch_from(prev, anchor, "fuzz epoch", *next, *g, options, uo, reference);
     if (!again.is_ok() || *r1::epoch_files(*again) != *r1::epoch_files(*inc)) finding("the same update gave other bytes");
