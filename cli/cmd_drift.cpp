@@ -27,6 +27,7 @@
 #include "r1/reference/incremental.hpp"
 #include "r1/reference/snapshot_io.hpp"
 #include "render/image.hpp"
+#include "update_options.hpp"
 
 namespace r1::cli {
 
@@ -47,8 +48,7 @@ struct DriftOptions {
   std::uint64_t seed = 1;
   std::string kind = "mixed";
   double weight = 1, scale = 0.5;
-  std::optional<std::uint32_t> hops, full_every;
-  std::optional<double> eps_x, full_norm;
+  UpdateCliOptions update;
 };
 
 struct Row {
@@ -280,20 +280,11 @@ Status run_drift(const DriftOptions& o) {
     return Status::input("drift: --kind '" + o.kind + "' is not add, remove, reweight or mixed");
   if (!(o.weight >= 0x1p-32 && o.weight < 0x1p30)) return Status::input("drift: --weight must lie in [2^-32, 2^30)");
   if (!(o.scale > 0 && o.scale < 1)) return Status::input("drift: --scale must lie in (0, 1)");
-  if (o.eps_x && !(*o.eps_x > 0 && *o.eps_x < 1)) return Status::input("drift: --eps-x must lie in (0, 1)");
-  if (o.full_norm && !(*o.full_norm >= 0 && std::isfinite(*o.full_norm)))
-    return Status::input("drift: --full-norm must be a finite number >= 0");
-  if (o.full_every && *o.full_every == 0) return Status::input("drift: --full-every must be at least 1");
-  if (o.hops && *o.hops > 64) return Status::input("drift: --hops must be at most 64");
+  R1_ASSIGN(const UpdateOptions uo, o.update.make("drift"));
   R1_ASSIGN(const ChosenBackend chosen, o.backend.make());
   ProgressLine progress;
   R1_ASSIGN(const ReadOptions ro, o.input.read_options(progress.sink()));
   R1_ASSIGN(Snapshot s, read_snapshot(o.snapshot, ro));
-  UpdateOptions uo;
-  if (o.eps_x) uo.eps = *o.eps_x;
-  uo.hops = o.hops;
-  if (o.full_every) uo.full_every = *o.full_every;
-  if (o.full_norm) uo.full_norm = *o.full_norm;
   UpdateOptions forced = uo;
   forced.force_full = true;
   const EpochOptions eo;
@@ -348,14 +339,14 @@ Status run_drift(const DriftOptions& o) {
   std::printf("summary    %zu of %u epochs incremental, %zu violations (true drift above certificate + the full solve's own bound)\n",
               incremental, o.epochs, violations);
   std::printf("units      cert, true: scene units (eps_X = %g); max, mean: position drift / R_scene; focusL1: sum |dphi|\n",
-              (o.eps_x ? *o.eps_x : 1e-3) * static_cast<double>(kSceneRadius));
+              uo.eps * static_cast<double>(kSceneRadius));
   if (!o.out.empty()) {
     AtomicDirectory out(o.out, is_drift_dir);
     R1_TRY(out.open());
     R1_TRY(out.write("drift.tsv", tsv(rows)));
     R1_TRY(out.write("drift.json", to_json(o, s, rows, violations).dump(2) + "\n"));
     std::string warning;
-    R1_TRY(write_chart(rows, (o.eps_x ? *o.eps_x : 1e-3) * static_cast<double>(kSceneRadius), out.temp_path() / "drift.png",
+    R1_TRY(write_chart(rows, uo.eps * static_cast<double>(kSceneRadius), out.temp_path() / "drift.png",
                        &warning));
     R1_TRY(out.commit());
     if (!warning.empty()) std::fprintf(stderr, "r1: warning: %s\n", warning.c_str());
@@ -377,10 +368,7 @@ void add_drift(CLI::App& app, Runner& selected) {
   cmd->add_option("--kind", o->kind, "add, remove, reweight or mixed (default)");
   cmd->add_option("--weight", o->weight, "weight of added links (1)");
   cmd->add_option("--scale", o->scale, "reweight: new weight = old (1 - scale u), u uniform in [0, 1) (0.5)");
-  cmd->add_option("--hops", o->hops, "h of the incremental update (default: from --eps-x and mu)");
-  cmd->add_option("--eps-x", o->eps_x, "position bound eps_X as a fraction of R_scene (0.001)");
-  cmd->add_option("--full-every", o->full_every, "a full solve at least every N epochs (64)");
-  cmd->add_option("--full-norm", o->full_norm, "a full solve once the summed ||dL|| bound exceeds this (0.05)");
+  o->update.add_to(*cmd);
   cmd->add_option("-o,--out", o->out, "directory for drift.tsv, drift.json and drift.png (written atomically)");
   o->input.add_to(*cmd);
   o->backend.add_to(*cmd);

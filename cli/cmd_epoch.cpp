@@ -11,6 +11,7 @@
 #include "input_options.hpp"
 #include "progress.hpp"
 #include "timing.hpp"
+#include "update_options.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/frame.hpp"
@@ -39,8 +40,7 @@ struct EpochCliOptions {
   bool quiet = false;
   // Incremental epochs (spec/incremental.md): the earlier epoch and the update's settings.
   std::string from;
-  std::optional<std::uint32_t> hops, full_every;
-  std::optional<double> eps_x, full_norm;
+  UpdateCliOptions update;
   bool full = false;
 };
 
@@ -134,15 +134,11 @@ void print_summary(const Epoch& e, const std::string& dir, double total_s) {
 
 Status run_epoch_cli(const EpochCliOptions& c) {
   if (c.out.empty()) return Status::input("epoch: say where to write the epoch (-o DIR)");
-  if (c.from.empty() && (c.hops || c.full_every || c.eps_x || c.full_norm || c.full))
+  if (c.from.empty() && (c.update.any() || c.full))
     return Status::input("epoch: --hops, --eps-x, --full-every, --full-norm and --full need --from PREV_EPOCH_DIR");
   if (!c.from.empty() && !c.anchor.empty())
     return Status::input("epoch: --from aligns to the earlier epoch's anchor; leave out --anchor");
-  if (c.eps_x && !(*c.eps_x > 0 && *c.eps_x < 1)) return Status::input("epoch: --eps-x must lie in (0, 1)");
-  if (c.full_norm && !(*c.full_norm >= 0 && std::isfinite(*c.full_norm)))
-    return Status::input("epoch: --full-norm must be a finite number >= 0");
-  if (c.full_every && *c.full_every == 0) return Status::input("epoch: --full-every must be at least 1");
-  if (c.hops && *c.hops > 64) return Status::input("epoch: --hops must be at most 64");
+  R1_ASSIGN(UpdateOptions uo, c.update.make("epoch"));
   R1_ASSIGN(EpochOptions o, epoch_options(c));
   R1_ASSIGN(const ChosenBackend chosen, c.backend.make());
   ProgressLine progress;
@@ -158,11 +154,6 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034).
     R1_ASSIGN(const Epoch prev, read_epoch(c.from));
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
-    UpdateOptions uo;
-    if (c.eps_x) uo.eps = *c.eps_x;
-    uo.hops = c.hops;
-    if (c.full_every) uo.full_every = *c.full_every;
-    if (c.full_norm) uo.full_norm = *c.full_norm;
     uo.force_full = c.full;
     R1_ASSIGN(e, run_epoch_from(prev, anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
   }
@@ -206,10 +197,7 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_flag("--parallel", c->parallel, "reference stages on every core: spectral, focus, encoding, hierarchy (same bits)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
   cmd->add_option("--from", c->from, "earlier epoch of this chain: update it incrementally where the certificate allows");
-  cmd->add_option("--hops", c->hops, "with --from: h, the neighbourhood of the edits (default from --eps-x and --mu)");
-  cmd->add_option("--eps-x", c->eps_x, "with --from: position bound eps_X as a fraction of R_scene (0.001)");
-  cmd->add_option("--full-every", c->full_every, "with --from: a full solve at least every N epochs (64)");
-  cmd->add_option("--full-norm", c->full_norm, "with --from: a full solve once the summed ||dL|| bound exceeds this (0.05)");
+  c->update.add_to(*cmd, "with --from: ");
   cmd->add_flag("--full", c->full, "with --from: solve in full (the update's record still written)");
   cmd->callback([c, &selected] { selected = [c] { return run_epoch_cli(*c); }; });
 }
