@@ -341,40 +341,20 @@ Residuals residuals(const SpectralOperator<Q32>& op, const std::vector<Q32>& u, 
   return out;
 }
 
-// The earlier frame applied to vectors (R1-INC-033): genesis scale, then the stored similarity.
+// The earlier frame applied to vectors (R1-INC-033): genesis scale, then the recorded similarity.
 Result<std::vector<std::array<Q32, 3>>> frame_positions(const Frame& f, const std::array<std::vector<Q32>, 5>& u,
-                                                        std::size_t n) {
+                                                        std::size_t n, const std::string& prev_name) {
   const auto scale = Q32::checked_from_double(f.scale);
-  if (!scale) return Status::input("the earlier epoch's scale is outside the Q32 range");
-  Similarity sim;
-  const Alignment& a = f.alignment;
-  if (!a.genesis) {
-    for (int k = 0; k < 9; ++k) {
-      const auto q = Q32::checked_from_double(a.scale * a.rotation[static_cast<std::size_t>(k)]);
-      if (!q) return Status::input("the earlier epoch's alignment is outside the Q32 range");
-      sim.m[static_cast<std::size_t>(k)] = *q;
-    }
-    for (int i = 0; i < 3; ++i) {
-      const auto q = Q32::checked_from_double(a.translation[static_cast<std::size_t>(i)]);
-      if (!q) return Status::input("the earlier epoch's alignment is outside the Q32 range");
-      sim.t[static_cast<std::size_t>(i)] = *q;
-    }
-    sim.reflected = a.reflected;
-  }
-  std::vector<std::array<Q32, 3>> pos(n);
-  for (std::size_t p = 0; p < n; ++p) {
-    std::array<Q32, 3> x{};
-    for (std::size_t c = 0; c < 3; ++c) {
-      const auto v = fx::checked_mul(u[c].empty() ? Q32{} : u[c][p], *scale);
-      if (!v) return Status::internal("incremental frame: a coordinate leaves the Q32 range");
-      x[c] = *v;
-    }
-    if (!a.genesis) {
-      const auto y = apply_similarity(sim, x);
-      if (!y) return Status::internal("incremental frame: a position leaves the Q32 range");
-      x = *y;
-    }
-    pos[p] = x;
+  if (!scale) return Status::input(prev_name + ": the scale is outside the Q32 range");
+  using Positions = std::vector<std::array<Q32, 3>>;
+  R1_ASSIGN(Positions pos, scaled_positions(u, n, *scale));
+  if (f.alignment.genesis) return pos;
+  auto sim = similarity_of(f.alignment);
+  if (!sim.is_ok()) return sim.status().with_prefix(prev_name + ": ");
+  for (auto& x : pos) {
+    const auto y = apply_similarity(*sim, x);
+    if (!y) return Status::internal("incremental frame: a position leaves the Q32 range");
+    x = *y;
   }
   return pos;
 }
@@ -602,7 +582,7 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   // The earlier frame, kept (R1-INC-033): outside N_h every position keeps its bits.
   e.frame.scale = prev.frame.scale;
   e.frame.alignment = prev.frame.alignment;
-  R1_ASSIGN(e.frame.position, frame_positions(prev.frame, s.u, n));
+  R1_ASSIGN(e.frame.position, frame_positions(prev.frame, s.u, n, prev_name));
   e.timings.push_back({std::string(stage_name(Stage::kFrame)),
                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_focus).count()});
   R1_TRY(epoch_tail(e, next, g, options, stages, progress));

@@ -55,14 +55,19 @@ Result<Frame> genesis_frame(const Spectrum<Q32>& s, std::uint32_t n) {
   const auto scale = fx::checked_div(Q32::from_int(kSceneRadius), Q32::from_raw(static_cast<std::int64_t>(m)));
   if (!scale) return Status::internal("frame: R_scene / max |X| does not fit Q32 (eigenvectors are not unit-norm)");
   f.scale = scale->to_double();
-  for (std::size_t p = 0; p < n; ++p) {
-    for (std::size_t c = 0; c < 3; ++c) {
-      const auto x = fx::checked_mul(Q32::from_raw(coord(c, p)), *scale);
-      if (!x) return Status::internal("frame: a scaled coordinate does not fit Q32 (eigenvectors are not unit-norm)");
-      f.position[p][c] = *x;
-    }
-  }
+  R1_ASSIGN(f.position, scaled_positions(s.u, n, *scale));
   return f;
+}
+
+Result<std::vector<std::array<Q32, 3>>> scaled_positions(const std::array<std::vector<Q32>, 5>& u, std::size_t n, Q32 scale) {
+  std::vector<std::array<Q32, 3>> pos(n);
+  for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const auto x = fx::checked_mul(u[c].empty() ? Q32{} : u[c][p], scale);
+      if (!x) return Status::internal("frame: a scaled coordinate does not fit Q32 (eigenvectors are not unit-norm)");
+      pos[p][c] = *x;
+    }
+  return pos;
 }
 
 }  // namespace r1

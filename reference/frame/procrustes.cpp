@@ -200,17 +200,32 @@ Result<Similarity> similarity_procrustes(std::span<const std::array<Q32, 3>> fro
       sim.translation[i] = ca[i] - sim.scale * dot3(row, cy);
     }
   }
-  // The applied transform (R1-FRM-036).
+  R1_TRY(set_applied_transform(sim).with_prefix("procrustes: "));
+  return sim;
+}
+
+Status set_applied_transform(Similarity& sim) {
+  // The applied transform (R1-FRM-036): RNE(s R) and RNE(t) from their doubles.
   for (int k = 0; k < 9; ++k) {
     const auto q = Q32::checked_from_double(sim.scale * sim.rotation[k]);
-    if (!q) return Status::input("procrustes: the alignment scale does not fit Q32");
+    if (!q) return Status::input("the alignment scale does not fit Q32");
     sim.m[k] = *q;
   }
   for (int i = 0; i < 3; ++i) {
     const auto q = Q32::checked_from_double(sim.translation[i]);
-    if (!q) return Status::input("procrustes: the alignment translation does not fit Q32");
+    if (!q) return Status::input("the alignment translation does not fit Q32");
     sim.t[i] = *q;
   }
+  return Status::ok();
+}
+
+Result<Similarity> similarity_of(const Alignment& a) {
+  Similarity sim;
+  sim.rotation = a.rotation;
+  sim.scale = a.scale;
+  sim.translation = a.translation;
+  sim.reflected = a.reflected;
+  R1_TRY(set_applied_transform(sim));
   return sim;
 }
 

@@ -35,6 +35,9 @@ std::int64_t sign_pivot(std::span<const double> u);
 // Positions X' = s (u_2, u_3, u_4) with s = R_scene / max |X| (R1-FRM-010), from a
 // sign-conventioned spectrum with `n` particles. Internal error when the spectrum's shape is wrong.
 Result<Frame> genesis_frame(const Spectrum<Q32>& conventioned, std::uint32_t n);
+// (u_2, u_3, u_4)(p) times `scale`, one rounding per coordinate (R1-FRM-010); a missing vector
+// gives 0. Internal error when a coordinate leaves the Q32 range.
+Result<std::vector<std::array<Q32, 3>>> scaled_positions(const std::array<std::vector<Q32>, 5>& u, std::size_t n, Q32 scale);
 
 // ---- anchor file (R1-FRM-020..023) ------------------------------------------------------------
 // The bytes (anchor_bytes, parse_anchor, anchor_digest) are the format library's,
@@ -76,6 +79,12 @@ struct Similarity {
 // `from` and `to` have equal length in 1..1024 (internal error otherwise); a coordinate beyond
 // |raw| <= 2^52, or a transform that does not fit Q32, is an input error.
 Result<Similarity> similarity_procrustes(std::span<const std::array<Q32, 3>> from, std::span<const std::array<Q32, 3>> to);
+// Sets sim.m and sim.t from sim.scale, sim.rotation and sim.translation (R1-FRM-036); input error
+// when they do not fit Q32.
+Status set_applied_transform(Similarity& sim);
+// The similarity an epoch's alignment records (not genesis), with the transform it applied: the
+// same bits as the Procrustes solution that produced it.
+Result<Similarity> similarity_of(const Alignment& a);
 // X' = M (F y) + T with one rounding per coordinate; nullopt when it leaves the Q32 range.
 std::optional<std::array<Q32, 3>> apply_similarity(const Similarity& sim, const std::array<Q32, 3>& y);
 
