@@ -306,12 +306,14 @@ std::vector<double> local_correction(const Graph& g, const Local& loc, const std
 // rounding of the application included) and the scaled norms.
 struct Residuals {
   std::array<double, 5> theta{}, rho{}, norm{};
+  std::vector<Q32> y;  // L~ u, n x 5
 };
 Residuals residuals(const SpectralOperator<Q32>& op, const std::vector<Q32>& u, int shift, bool parallel) {
   const std::size_t n = op.n;
-  std::vector<Q32> y(n * 5);
-  op.apply_block(u.data(), 5, y.data(), 5, 5, parallel);
   Residuals out;
+  out.y.resize(n * 5);
+  std::vector<Q32>& y = out.y;
+  op.apply_block(u.data(), 5, y.data(), 5, 5, parallel);
   for (std::size_t c = 0; c < 5; ++c) {
     fx::ExactSum uu, uy;
     for (std::size_t i = 0; i < n; ++i) {
@@ -500,20 +502,13 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
     for (std::size_t i = 0; i < n; ++i)
       out[c][i] = batch.prev_of[i] >= 0 ? prev.spectrum.u[c][static_cast<std::size_t>(batch.prev_of[i])] : Q32{};
     if (loc.rows.empty()) continue;
-    // The residual on the compact rows, value units of the scaled vector.
+    // The residual on the compact rows, value units of the scaled vector, from the exact product.
     const double theta = before_update.theta[c];
-    std::vector<double> x(loc.rows.size()), r;
-    for (std::size_t a = 0; a < loc.rows.size(); ++a) x[a] = static_cast<double>(u[loc.rows[a] * 5 + c].raw) * 0x1p-32;
-    {
-      // (L~ - theta) u on the compact rows with every neighbour's value (u is global).
-      r.assign(loc.rows.size(), 0.0);
-      for (std::size_t a = 0; a < loc.rows.size(); ++a) {
-        const std::uint32_t i = loc.rows[a];
-        double s = 0;
-        for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
-          s = s + loc.m[k] * static_cast<double>(u[std::size_t{g.col[k]} * 5 + c].raw) * 0x1p-32;
-        r[a] = (1 - theta) * x[a] - s;
-      }
+    std::vector<double> x(loc.rows.size()), r(loc.rows.size());
+    for (std::size_t a = 0; a < loc.rows.size(); ++a) {
+      const std::size_t k = std::size_t{loc.rows[a]} * 5 + c;
+      x[a] = static_cast<double>(u[k].raw) * 0x1p-32;
+      r[a] = (static_cast<double>(before_update.y[k].raw) - theta * static_cast<double>(u[k].raw)) * 0x1p-32;
     }
     const std::vector<double> z = local_correction(g, loc, r, theta, uo.krylov);
     // Stored vector: the earlier raw plus the correction, rounded once to the unit-norm scale.
