@@ -243,7 +243,7 @@ Status write_chart(const std::vector<Row>& rows, double eps_x, const fs::path& p
   };
   const double bw = (p.x1 - p.x0) / static_cast<double>(n);
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (!rows[i].update.incremental) cv.rect(x_of(i) - bw / 2, p.y0, x_of(i) + bw / 2, p.y1, srgb(236, 236, 236));
+    if (!rows[i].update.incremental) cv.rect(x_of(i) - bw / 2, p.y0, x_of(i) + bw / 2, p.y1, srgb(218, 218, 218));
     const std::size_t step = std::max<std::size_t>(1, rows.size() / 12);
     if (i % step == 0) cv.text(x_of(i), p.y1 + 20, std::to_string(rows[i].epoch), kLabel, kInk, 1);
   }
