@@ -150,7 +150,9 @@ Row compare(std::uint32_t k, const Epoch& inc, const Epoch& full, double t_inc, 
   // The certified quantity against the full solve's stored vectors (R1-INC-032, R1-DRF-020).
   r.true_drift = vector_drift(inc, full);
   r.full_error = full_solve_bound(full, frame_scale(inc.frame));
-  if (!std::isfinite(r.full_error)) {
+  if (!r.update.certified) {
+    r.check = "uncertified";  // kept by --keep-local: nothing to hold it to (R1-INC-036)
+  } else if (!std::isfinite(r.full_error)) {
     r.check = "unchecked";
   } else {
     // The stored vectors' own rounding (half a raw per entry) is inside both bounds already.

@@ -1,5 +1,6 @@
 // Options of the incremental update that r1 epoch --from and r1 drift share (spec/incremental.md
-// R1-INC-020, R1-INC-030): --hops, --eps-x, --full-every, --full-norm, checked in one place.
+// R1-INC-020, R1-INC-030, R1-INC-036): --hops, --eps-x, --full-every, --full-norm, --keep-local,
+// checked in one place.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -15,6 +16,7 @@ namespace r1::cli {
 struct UpdateCliOptions {
   std::optional<std::uint32_t> hops, full_every;
   std::optional<double> eps_x, full_norm;
+  bool keep_local = false;
 
   // `prefix` goes before each help text ("with --from: " for r1 epoch).
   void add_to(CLI::App& cmd, const std::string& prefix = "") {
@@ -22,9 +24,11 @@ struct UpdateCliOptions {
     cmd.add_option("--eps-x", eps_x, prefix + "position bound eps_X as a fraction of R_scene (0.001)");
     cmd.add_option("--full-every", full_every, prefix + "a full solve at least every N epochs (64)");
     cmd.add_option("--full-norm", full_norm, prefix + "a full solve once the summed ||dL|| bound exceeds this (0.05)");
+    cmd.add_flag("--keep-local", keep_local,
+                 prefix + "keep the local update when its certificate exceeds eps_X (recorded as uncertified; for timing and drift studies)");
   }
 
-  bool any() const { return hops || full_every || eps_x || full_norm; }
+  bool any() const { return hops || full_every || eps_x || full_norm || keep_local; }
 
   // The options, or an input error naming the flag; `command` starts each message ("epoch").
   Result<UpdateOptions> make(const std::string& command) const {
@@ -38,6 +42,7 @@ struct UpdateCliOptions {
     uo.hops = hops;
     if (full_every) uo.full_every = *full_every;
     if (full_norm) uo.full_norm = *full_norm;
+    uo.keep_local = keep_local;
     return uo;
   }
 };

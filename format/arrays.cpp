@@ -28,6 +28,19 @@ std::string q32_triples(std::span<const std::array<fx::Q32, 3>> v) {
   return o;
 }
 
+std::string u64_column(std::span<const std::uint64_t> v) {
+  std::string o;
+  o.reserve(v.size() * 8);
+  for (const std::uint64_t x : v) put_u64(o, x);
+  return o;
+}
+
+std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n) {
+  std::vector<std::uint64_t> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = load_u64(b.data() + i * 8);
+  return v;
+}
+
 std::string u32_rows(std::span<const std::vector<std::uint32_t>> columns, std::size_t rows) {
   std::string o;
   o.reserve(rows * columns.size() * 4);

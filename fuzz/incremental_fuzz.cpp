@@ -1,7 +1,8 @@
 // Fuzzing graph edits for incremental drift (spec/incremental.md R1-INC, spec/drift.md; R1-TEST-010):
 // the bytes make a small graph and up to four edit batches; each batch's epoch from the one
-// before must be deterministic, conserve focus exactly, give the same bytes on every conformant
-// backend, and, when incremental, stay within its certificate of the full solve.
+// before must be deterministic, conserve focus exactly (and, updated locally, keep it outside N_h),
+// give the same bytes on every conformant backend, and, when incremental, stay within its
+// certificate of the full solve.
 #include <cmath>
 #include <set>
 #include <string>
@@ -105,6 +106,17 @@ R1_FUZZ_TARGET(incremental) {
       total += phi.raw;
     }
     if (total != r1::Q32::kOneRaw) finding("focus does not sum to exactly 1");
+    // A local focus update freezes every particle outside N_h (R1-INC-050).
+    if (inc->update->focus_local) {
+      auto batch_now = r1::edit_batch(prev, *next, *g, "fuzz epoch");
+      if (!batch_now.is_ok()) finding("the edit batch failed where the update succeeded");
+      std::vector<char> inside(g->n, 0);
+      for (const std::uint32_t i : r1::neighbourhood(*g, batch_now->touched, inc->update->hops)) inside[i] = 1;
+      for (std::uint32_t i = 0; i < g->n; ++i)
+        if (!inside[i] && batch_now->prev_of[i] >= 0 &&
+            inc->focus.phi[i] != prev.focus.phi[static_cast<std::size_t>(batch_now->prev_of[i])])
+          finding("a frozen particle's focus moved");
+    }
     // Every conformant backend gives the same epoch.
     for (const auto& info : r1::backends::registered_backends()) {
       if (!info.expected_conformant) continue;

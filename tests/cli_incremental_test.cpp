@@ -39,6 +39,8 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
   EXPECT_NE(r.out.find("update             incremental: 2 touched"), std::string::npos) << r.out;
   const json u = manifest(c.d / "inc").at("update");
   EXPECT_EQ(u.at("mode"), "incremental");
+  EXPECT_EQ(u.at("focus"), "local");
+  EXPECT_NE(r.out.find("focus updated on N_h"), std::string::npos) << r.out;
   EXPECT_EQ(u.at("hops"), 3);
   EXPECT_LE(u.at("certificate").get<double>(), u.at("eps_x").get<double>());
   EXPECT_EQ(u.at("vector_bound").at(4), nullptr);
@@ -61,6 +63,36 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
             0);
   EXPECT_EQ(manifest(c.d / "full").at("update").at("reason"), "forced (--full)");
   EXPECT_FALSE(manifest(c.d / "full").at("alignment").at("genesis").get<bool>());
+}
+
+// An eps_X no certificate meets: a full solve, unless --keep-local keeps the update (R1-INC-036),
+// which the record and the summary call uncertified.
+TEST(CliIncremental, KeepLocalKeepsAnUncertifiedUpdateAndSaysSo) {
+  Chain c;
+  const auto strict = run_cli({"epoch", c.next.string(), "--from", c.prev.string(), "--hops", "3", "--eps-x", "1e-9",
+                               "--no-timings", "-q", "-o", (c.d / "strict").string()});
+  ASSERT_EQ(strict.exit_code, 0) << strict.err;
+  const json s = manifest(c.d / "strict").at("update");
+  EXPECT_EQ(s.at("mode"), "full");
+  EXPECT_FALSE(s.at("certified").get<bool>());
+  EXPECT_EQ(s.at("reason").get<std::string>().rfind("certificate ", 0), 0u) << s.at("reason");
+  const auto kept = run_cli({"epoch", c.next.string(), "--from", c.prev.string(), "--hops", "3", "--eps-x", "1e-9",
+                             "--keep-local", "--no-timings", "-o", (c.d / "kept").string()});
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  const json k = manifest(c.d / "kept").at("update");
+  EXPECT_EQ(k.at("mode"), "incremental");
+  EXPECT_FALSE(k.at("certified").get<bool>());
+  EXPECT_EQ(k.at("reason").get<std::string>().rfind("uncertified (--keep-local): certificate ", 0), 0u) << k.at("reason");
+  EXPECT_GT(k.at("certificate").get<double>(), k.at("eps_x").get<double>());
+  EXPECT_NE(kept.out.find("(uncertified, --keep-local)"), std::string::npos) << kept.out;
+  // The same update as the certified one at the default eps_X: only the record differs.
+  ASSERT_EQ(run_cli({"epoch", c.next.string(), "--from", c.prev.string(), "--hops", "3", "--no-timings", "-q", "-o",
+                     (c.d / "certified").string()})
+                .exit_code,
+            0);
+  EXPECT_TRUE(manifest(c.d / "certified").at("update").at("certified").get<bool>());
+  EXPECT_EQ(r1::test::read_file(c.d / "kept" / "positions.q32"), r1::test::read_file(c.d / "certified" / "positions.q32"));
+  EXPECT_EQ(r1::test::read_file(c.d / "kept" / "focus.q32"), r1::test::read_file(c.d / "certified" / "focus.q32"));
 }
 
 TEST(CliIncremental, BadInputIsOneLineExitTwoAndNothingWritten) {

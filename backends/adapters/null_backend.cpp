@@ -37,6 +37,10 @@ class NullBackend final : public Backend {
     for (std::uint32_t i = 0; i < g.n; ++i) f.cyberank.push_back(i);
     return f;
   }
+  Result<Focus<Q32>> focus_update(const Graph& g, const EpochOptions& o, double l2, std::span<const Q32>,
+                                  std::span<const std::uint32_t>, const ProgressFn& p) override {
+    return focus(g, o, l2, p);  // the same uniform focus: no graph information either way
+  }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>&, const Anchor*, const std::string&) override {
     ++calls_[Stage::kFrame];
     // Particles scattered over a fixed integer lattice inside |x|, |y|, |z| <= 500, by index

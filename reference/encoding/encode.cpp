@@ -166,10 +166,19 @@ Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& grap
     e.role.assign(n, Role::kNone);
     e.shape.assign(n, Shape::kSphere);
     if (options.role_shapes) {
-      const Betweenness b = betweenness(graph, snapshot.particles, options.betweenness, progress, BetweennessRun{options.parallel, true});
-      inf.betweenness_exact = b.exact;
-      inf.betweenness_sources = b.sources;
-      e.role = infer_roles(graph, b.value, &inf.roles);
+      if (options.carried_betweenness) {
+        // R1-INC-037: the earlier epoch's values, by particle.
+        if (options.carried_betweenness->size() != n)
+          return Status::internal("encoding: " + std::to_string(options.carried_betweenness->size()) + " carried betweenness values for " +
+                                  std::to_string(n) + " particles");
+        e.betweenness = *options.carried_betweenness;
+      } else {
+        Betweenness b = betweenness(graph, snapshot.particles, options.betweenness, progress, BetweennessRun{options.parallel, true});
+        inf.betweenness_exact = b.exact;
+        inf.betweenness_sources = b.sources;
+        e.betweenness = std::move(b.value);
+      }
+      e.role = infer_roles(graph, e.betweenness, &inf.roles);
       for (std::size_t p = 0; p < n; ++p) e.shape[p] = role_shape(e.role[p]);
     }
 

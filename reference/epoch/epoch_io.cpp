@@ -13,6 +13,7 @@
 
 #include "../snapshot/text_util.hpp"
 #include "r1/format/arrays.hpp"
+#include "r1/format/bytes.hpp"
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/hierarchy.hpp"
@@ -26,7 +27,7 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "r1-epoch";
-constexpr int kVersion = 2;  // 2: edges.bin; hierarchy.bin read back and checked
+constexpr int kVersion = 3;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64
 
 using format::kEdgeBytes;
 using format::q32_column;
@@ -68,6 +69,9 @@ json update_json(const UpdateInfo& u) {
           {"dropped", u.dropped},
           {"resized_since_full", u.resized_since_full},
           {"region", u.region},
+          {"focus", u.focus_local ? "local" : "full"},
+          {"certified", u.certified},
+          {"betweenness", u.betweenness_carried ? "carried" : "computed"},
           {"delta_norm", u.delta_norm},
           {"delta_norm_since_full", u.delta_norm_since_full},
           {"full_eigenvalues", u.full_eigenvalues},
@@ -88,6 +92,9 @@ UpdateInfo update_from(const json& j) {
   u.dropped = j.at("dropped").get<std::uint64_t>();
   u.resized_since_full = j.at("resized_since_full").get<std::uint64_t>();
   u.region = j.at("region").get<std::uint64_t>();
+  u.focus_local = j.at("focus").get<std::string>() == "local";
+  u.certified = j.at("certified").get<bool>();
+  u.betweenness_carried = j.at("betweenness").get<std::string>() == "carried";
   u.delta_norm = j.at("delta_norm").get<double>();
   u.delta_norm_since_full = j.at("delta_norm_since_full").get<double>();
   u.full_eigenvalues = j.at("full_eigenvalues").get<std::array<double, 6>>();
@@ -112,6 +119,8 @@ bool is_epoch_dir(const fs::path& dir) { return manifest_format_is(dir, kFormat)
 
 Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch& e) {
   const std::size_t n = e.ids.size();
+  if (e.out_rows.size() != n)
+    return Status::internal("epoch: " + std::to_string(e.out_rows.size()) + " out-row digests for " + std::to_string(n) + " particles");
   std::vector<std::pair<std::string, std::string>> f;
   {
     std::string ids;
@@ -144,6 +153,16 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
   f.emplace_back("clusters.u32", format::u32_rows(e.hierarchy.cluster_of, n));
   f.emplace_back("hierarchy.bin", hierarchy_bytes(e.hierarchy));
   f.emplace_back("edges.bin", format::edge_rows(e.edges));
+  f.emplace_back("outrows.u64", format::u64_column(e.out_rows));
+  if (!e.encoding.betweenness.empty()) {
+    if (e.encoding.betweenness.size() != n)
+      return Status::internal("epoch: " + std::to_string(e.encoding.betweenness.size()) + " betweenness values for " + std::to_string(n) +
+                              " particles");
+    std::string b;
+    b.reserve(n * 8);
+    for (const double x : e.encoding.betweenness) format::put_f64(b, x);
+    f.emplace_back("betweenness.f64", std::move(b));
+  }
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
   for (std::size_t i = 0; i < anchor_count(n); ++i) anchor.entries.push_back({e.ids[i], e.frame.position[i]});
@@ -402,6 +421,18 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   e.titles.assign(n, {});
   if (const InputFile* t = files.find("titles.tsv")) R1_TRY(read_titles(*t, (dir / "titles.tsv").string(), e));
   R1_TRY(read_edges(files, dir / "edges.bin", n, m.at("snapshot").at("layout_edges").get<std::size_t>(), e));
+  R1_ASSIGN(const std::string_view out_rows, files.rows("outrows.u64", 8));
+  e.out_rows = format::read_u64_column(out_rows, n);
+  if (files.find("betweenness.f64")) {
+    R1_ASSIGN(const std::string_view b, files.rows("betweenness.f64", 8));
+    e.encoding.betweenness.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = format::load_f64(b.data() + 8 * i);
+      if (!(x >= 0 && std::isfinite(x)))
+        return Status::input((dir / "betweenness.f64").string() + ": byte " + std::to_string(8 * i) + ": not a finite betweenness >= 0");
+      e.encoding.betweenness[i] = x;
+    }
+  }
   // The hierarchy the renderer walks: parsed, and checked against the particle data (R1-HIER-052).
   const std::string hier_path = (dir / "hierarchy.bin").string();
   const InputFile* hier = files.find("hierarchy.bin");

@@ -8,6 +8,7 @@
 
 #include "r1/solvers/focus.hpp"
 #include "r1/reference/frame.hpp"
+#include "r1/reference/incremental.hpp"
 #include "r1/solvers/spectral.hpp"
 
 namespace r1 {
@@ -94,6 +95,15 @@ Result<Focus<Q32>> ReferenceStages::focus(const Graph& g, const EpochOptions& o,
   return reference_focus_stage(g, adjusted(o), lambda2, p);
 }
 
+Result<Focus<Q32>> ReferenceStages::focus_update(const Graph& g, const EpochOptions& o, double lambda2,
+                                                 std::span<const Q32> start, std::span<const std::uint32_t> region,
+                                                 const ProgressFn& p) {
+  if (fp64_ || o.domain != NumericDomain::kQ32) return Status::input("focus update: the fp64 domain has no local update");
+  FocusOptions fo;
+  fo.parallel = o.parallel || parallel_;  // R1-FOC-090: the same bits
+  return update_focus_q32(g, o.trikernel, lambda2, start, region, p, fo);
+}
+
 Result<Frame> ReferenceStages::frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& name) {
   return compute_frame(s, c, a, name);
 }
@@ -143,6 +153,7 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
   for (std::uint32_t i = 0; i < graph.n; ++i)
     for (std::uint64_t k = graph.row_ptr[i]; k < graph.row_ptr[i + 1]; ++k)
       if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
+  e.out_rows = out_row_digests(graph, snapshot.particles);  // what the next epoch of the chain compares
   e.trikernel = o.trikernel;
   e.spectral_params = o.spectral;
   return e;

@@ -8,11 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/intern_index.hpp"
 #include "r1/solvers/exact_round.hpp"
+#include "r1/solvers/focus.hpp"
 #include "r1/solvers/spectral.hpp"
 
 namespace r1 {
@@ -84,32 +86,36 @@ std::uint32_t hops_for(double eps, double mu) {
   return h;
 }
 
-std::vector<std::uint32_t> neighbourhood(const Graph& g, const std::vector<std::uint32_t>& seeds, std::uint32_t h) {
-  std::vector<char> in(g.n, 0);
-  std::vector<std::uint32_t> all, frontier;
-  for (std::uint32_t s : seeds)
-    if (!in[s]) {
-      in[s] = 1;
-      frontier.push_back(s);
+namespace {
+// The splitmix64 finaliser (Steele, Lea and Flood 2014): a bijection of 64-bit words whose output
+// bits each depend on every input bit.
+std::uint64_t mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+}  // namespace
+
+std::vector<std::uint64_t> out_row_digests(const Graph& g, std::span<const ParticleId> ids) {
+  std::vector<std::uint64_t> d(g.n, 0);
+  for (std::uint32_t p = 0; p < g.n; ++p)
+    for (std::uint64_t k = g.out_ptr[p]; k < g.out_ptr[p + 1]; ++k) {
+      std::uint64_t t = 0;
+      for (int b = 7; b >= 0; --b) t = (t << 8) | ids[g.out_col[k]][static_cast<std::size_t>(b)];
+      d[p] += mix64(t ^ mix64(static_cast<std::uint64_t>(g.out_w[k])));
     }
-  all = frontier;
-  for (std::uint32_t hop = 0; hop < h && !frontier.empty(); ++hop) {
-    std::vector<std::uint32_t> next;
-    for (std::uint32_t i : frontier)
-      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
-        if (!in[g.col[k]]) {
-          in[g.col[k]] = 1;
-          next.push_back(g.col[k]);
-        }
-    all.insert(all.end(), next.begin(), next.end());
-    frontier = std::move(next);
-  }
-  std::sort(all.begin(), all.end());
-  return all;
+  return d;
+}
+
+std::vector<std::uint32_t> neighbourhood(const Graph& g, const std::vector<std::uint32_t>& seeds, std::uint32_t h) {
+  return within_hops(g, seeds, h);
 }
 
 Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name) {
   const std::size_t np = prev.ids.size(), n = next.particles.size();
+  if (prev.out_rows.size() != np)
+    return Status::input(prev_name + ": " + std::to_string(prev.out_rows.size()) + " out-row digests for " + std::to_string(np) +
+                         " particles");
   const IdIndex index = IdIndex::over(next.particles);
   std::vector<std::int64_t> next_of(np);
   for (std::size_t p = 0; p < np; ++p) next_of[p] = index.find(prev.ids[p], next.particles);
@@ -146,6 +152,9 @@ Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Grap
       std::sort(out.begin(), out.end(), [](const Entry& x, const Entry& y) { return x.key < y.key; });
   };
 
+  // The directed rows (A0, which the focus reads) compare by digest: a link that only changes
+  // direction leaves A_sym and A2 as they were.
+  const std::vector<std::uint64_t> out_rows = out_row_digests(g, next.particles);
   std::vector<Entry> a, c;
   for (std::uint32_t i = 0; i < n; ++i) {
     if (b.prev_of[i] < 0) {
@@ -155,7 +164,7 @@ Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Grap
     }
     next_row(i, a);
     prev_row(static_cast<std::size_t>(b.prev_of[i]), c);
-    bool same = a.size() == c.size();
+    bool same = a.size() == c.size() && out_rows[i] == prev.out_rows[static_cast<std::size_t>(b.prev_of[i])];
     for (std::size_t k = 0; same && k < a.size(); ++k) same = a[k].key == c[k].key && a[k].w == c[k].w && a[k].a2 == c[k].a2;
     if (!same) b.touched.push_back(i);
   }
@@ -413,6 +422,7 @@ double full_solve_bound(const Epoch& f, double s) {
 Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
+  const auto batch_start = std::chrono::steady_clock::now();
   R1_ASSIGN(EditBatch batch, edit_batch(prev, next, g, prev_name));
   const std::size_t n = g.n;
 
@@ -471,6 +481,7 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
 
   // ---- the local update of u_2..u_6 (R1-INC-031) ----
   auto clock = std::chrono::steady_clock::now();
+  const double batch_s = std::chrono::duration<double>(clock - batch_start).count();
   R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
   const int shift = op.e / 2;  // vectors scaled by 2^shift: the operator's rounding shrinks by as much
   // Unit vectors have entries of magnitude at most 1 (2^32 raws; a little more after updates): an
@@ -546,7 +557,11 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   const double b2 = info.vector_bound[0] * info.vector_bound[0] + info.vector_bound[1] * info.vector_bound[1] +
                     info.vector_bound[2] * info.vector_bound[2];
   info.certificate = std::isfinite(b2) ? s_total * std::sqrt(b2) + 1e-6 : kInf;
-  if (!(info.certificate <= info.eps_x))
+  info.certified = info.certificate <= info.eps_x;
+  if (!info.certified && uo.keep_local)
+    info.reason = std::isfinite(info.certificate) ? "uncertified (--keep-local): certificate " + fmt(info.certificate) + " exceeds eps_X " + fmt(info.eps_x)
+                                                  : std::string("uncertified (--keep-local): no certificate");
+  if (!info.certified && !uo.keep_local)
     return full(std::isfinite(info.certificate)
                     ? "certificate " + fmt(info.certificate) + " exceeds eps_X " + fmt(info.eps_x)
                     : std::string(padded_ok ? "no certificate: an updated eigenvalue is not separated from its neighbours"
@@ -568,10 +583,26 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   s.u = std::move(out);
   s.matvecs = 10;  // two block applications for the residuals
   s.passes = 2;
+  e.timings.push_back({"batch", batch_s});  // the edit batch and N_h (R1-INC-010..021)
   e.timings.push_back({std::string(stage_name(Stage::kSpectral)), spectral_s});
   clock = std::chrono::steady_clock::now();
   const double lambda2 = s.eigenvalues[1];
-  R1_ASSIGN(e.focus, stages.focus(g, options, lambda2, progress));
+  {
+    // phi on N_h from PREV's, every other particle frozen (R1-INC-050); the full iteration when
+    // the frozen particles leave the region less than one raw each.
+    std::vector<Q32> start(n);
+    for (std::size_t i = 0; i < n; ++i)
+      if (batch.prev_of[i] >= 0) start[i] = prev.focus.phi[static_cast<std::size_t>(batch.prev_of[i])];
+    auto local = stages.focus_update(g, options, lambda2, start, nh, progress);
+    if (local.is_ok()) {
+      e.focus = std::move(*local);
+      info.focus_local = true;
+    } else if (local.status().kind() == ErrorKind::kInput) {
+      R1_ASSIGN(e.focus, stages.focus(g, options, lambda2, progress));
+    } else {
+      return local.status();
+    }
+  }
   const auto t_focus = std::chrono::steady_clock::now();
   e.timings.push_back({std::string(stage_name(Stage::kFocus)), std::chrono::duration<double>(t_focus - clock).count()});
   // The earlier frame, kept (R1-INC-033): outside N_h every position keeps its bits.
@@ -580,7 +611,17 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   R1_ASSIGN(e.frame.position, frame_positions(prev.frame, s.u, n, prev_name));
   e.timings.push_back({std::string(stage_name(Stage::kFrame)),
                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_focus).count()});
-  R1_TRY(epoch_tail(e, next, g, options, stages, progress));
+  // Roles from the earlier epoch's betweenness, by particle (R1-INC-037): an added particle has
+  // no shortest paths through it yet as far as the carried values know.
+  EpochOptions tail_options = options;
+  if (!prev.encoding.betweenness.empty() && options.encoding.role_shapes) {
+    auto carried = std::make_shared<std::vector<double>>(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      if (batch.prev_of[i] >= 0) (*carried)[i] = prev.encoding.betweenness[static_cast<std::size_t>(batch.prev_of[i])];
+    tail_options.encoding.carried_betweenness = std::move(carried);
+    info.betweenness_carried = true;
+  }
+  R1_TRY(epoch_tail(e, next, g, tail_options, stages, progress));
   info.incremental = true;
   e.update = info;
   return e;

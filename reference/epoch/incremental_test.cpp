@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <rapidcheck.h>
 #include <cmath>
+#include <sstream>
 #include <functional>
 #include <set>
 
@@ -17,6 +18,7 @@
 #include "r1/reference/frame.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "r1/solvers/focus.hpp"
 #include "r1/solvers/spectral.hpp"
 #include "rc_cases.hpp"
 
@@ -97,6 +99,27 @@ TEST(Incremental, NeighbourhoodIsTheBallOfHHops) {
   EXPECT_EQ(r1::neighbourhood(g, {5}, 2), (std::vector<std::uint32_t>{3, 4, 5, 6, 7}));
   EXPECT_EQ(r1::neighbourhood(g, {0, 19}, 1), (std::vector<std::uint32_t>{0, 1, 18, 19}));
   EXPECT_EQ(r1::neighbourhood(g, {}, 3), std::vector<std::uint32_t>{});
+}
+
+// A link that only changes direction leaves A_sym and A2 alone but not the focus's A0: both
+// endpoints are touched (by their out-row digests), the operator bound stays at rounding level,
+// and the focus update runs on them.
+TEST(Incremental, ADirectionChangeTouchesBothEndpoints) {
+  const r1::Snapshot s = rgg(300);
+  const r1::Epoch prev = full_epoch(s);
+  const std::string a = s.names[s.links[0].from], b = s.names[s.links[0].to];
+  const r1::Snapshot next = edited(s, "remove\t" + a + "\t" + b + "\nadd\t" + b + "\t" + a + "\n");
+  const r1::Graph g = graph(next);
+  auto batch = r1::edit_batch(prev, next, g, "prev");
+  ASSERT_TRUE(batch.is_ok()) << batch.status().message();
+  // Particles are renumbered by first appearance; find the two endpoints by name.
+  std::vector<std::uint32_t> want;
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    if (next.names[i] == a || next.names[i] == b) want.push_back(i);
+  ASSERT_EQ(want.size(), 2u);
+  EXPECT_TRUE(batch->touched == want) << batch->touched.size() << " touched";
+  EXPECT_EQ(batch->added + batch->dropped, 0u);
+  EXPECT_LT(batch->delta_norm, 1e-9);  // A_sym and A2 as they were: rounding allowance only
 }
 
 TEST(Incremental, TouchedRowsAndTheNormBoundAgainstADenseOracle) {
@@ -213,8 +236,29 @@ TEST(Incremental, CertifiedUpdateBoundsTheExactEigenvectorsAndFreezesTheRest) {
     }
     ASSERT_EQ(r.epoch.frame.position[i], r.prev.frame.position[i]) << i;
     for (std::size_t c = 0; c < 5; ++c) ASSERT_EQ(r.epoch.spectrum.u[c][i], r.prev.spectrum.u[c][i]);
+    ASSERT_EQ(r.epoch.focus.phi[i], r.prev.focus.phi[i]) << i;  // R1-INC-050: phi frozen too
   }
   EXPECT_GT(moved, 0u);
+  // phi on N_h only, conserved exactly, every raw positive, and nearer the edited graph's full
+  // focus than the earlier phi is.
+  EXPECT_TRUE(u.focus_local);
+  std::int64_t total = 0;
+  for (const r1::Q32 x : r.epoch.focus.phi) {
+    ASSERT_GE(x.raw, 1);
+    total += x.raw;
+  }
+  EXPECT_EQ(total, std::int64_t{1} << 32);
+  auto full_focus = r1::compute_focus_q32(r.g, r1::TriKernelParams{}, r.epoch.spectrum.eigenvalues[1]);
+  ASSERT_TRUE(full_focus.is_ok());
+  double left = 0, moved_phi = 0;
+  for (std::uint32_t i = 0; i < r.g.n; ++i) {
+    left += std::fabs(r.epoch.focus.phi[i].to_double() - full_focus->phi[i].to_double());
+    moved_phi += std::fabs(r.prev.focus.phi[i].to_double() - full_focus->phi[i].to_double());
+  }
+  EXPECT_LT(left, moved_phi);
+  std::ostringstream said;
+  said << std::scientific << left << " of " << moved_phi;
+  RecordProperty("focus_l1_left", said.str());
   // The exact eigenvectors of the operator (dense, Eigen): each updated vector lies within its
   // bound of the sign-matched one.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense_operator(r.g));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "r1/fixedpoint/int128.hpp"
+#include "r1/fixedpoint/q32.hpp"
 
 namespace r1::focus {
 
@@ -20,5 +21,10 @@ struct ApportionScratch {
 // w.size() < 2^32, and sum w < 2^96 (true for any 2^32 weights below 2^64).
 void apportion_into(std::uint64_t total, std::span<const std::uint64_t> w, std::span<std::int64_t> out,
                     ApportionScratch& scratch);
+
+// Proj onto `total` raws (R1-FOC-051 with 2^32 replaced by total; R1-INC-051): out_i = 1 +
+// apportion(total - n, max(v_i - 1, 0)), so the raws sum to exactly `total` and each is at least
+// 1. std::invalid_argument unless 1 <= n <= total <= 2^32 and out has n entries.
+void project_onto(std::span<const fx::Q32> v, std::uint64_t total, std::span<fx::Q32> out);
 
 }  // namespace r1::focus

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "focus_operators.hpp"
+#include "apportion.hpp"
 #include "heat_kernel.hpp"
 #include "r1/fixedpoint/elementary.hpp"
 #include "r1/fixedpoint/exact_sum.hpp"
@@ -139,45 +140,123 @@ Result<FocusPlan> plan_focus_steps(const Graph& g, const TriKernelParams& p, dou
   });
 }
 
+namespace {
+
+// The tri-kernel steps (R1-FOC-050, R1-INC-051): `steps` times v = l_d D + l_s S + l_h H on the
+// first `active` entries of phi, then Proj onto `total` raws there; entries from `active` on stay.
+// `heat_offset` (empty, or one raw per active entry) is added exactly to the heat term (R1-INC-052).
+void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std::uint32_t steps, std::uint32_t active,
+                   std::uint64_t total, bool parallel, std::vector<Q32>& phi, const ProgressFn& progress,
+                   const std::vector<std::int64_t>& heat_offset = {}) {
+  const bool use_d = p.lambda_d.raw != 0, use_s = p.lambda_s.raw != 0, use_h = p.lambda_h.raw != 0;
+  const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
+  const bool offset = !heat_offset.empty();
+  std::vector<Q32> d, s, h, v(active);
+  for (std::uint32_t step = 0; step < steps; ++step) {
+    // A zero-weight operator contributes exactly 0 and is skipped (R1-FOC-050).
+    if (use_d) ops.diffusion(phi, d);
+    if (use_s) ops.springs(phi, s);
+    if (use_h) focus::heat_q32(ops, heat, phi, h);
+    focus::for_rows(parallel, active, [&](std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        i128 acc = 0;  // three products below 2^96: exact
+        if (use_d) acc += static_cast<i128>(p.lambda_d.raw) * d[i].raw;
+        if (use_s) acc += static_cast<i128>(p.lambda_s.raw) * s[i].raw;
+        if (use_h) acc += static_cast<i128>(p.lambda_h.raw) * (offset ? i128{h[i].raw} + heat_offset[i] : i128{h[i].raw});
+        v[i] = Q32::from_raw(focus::round_q32(acc));
+      }
+    });
+    focus::project_onto(v, total, std::span<Q32>(phi).first(active));
+    report(progress, "focus", step + 1, steps);
+  }
+}
+
+// Syntropy RNE(sum phi_i ln phi_i + ln n), an exact sum (R1-FOC-071), and cyberank (R1-FOC-070).
+Focus<Q32> finish_q32(std::vector<Q32> phi, const FocusPlan& plan, bool parallel) {
+  const auto n = static_cast<std::uint32_t>(phi.size());
+  std::vector<Q32> logs(n);
+  focus::for_rows(parallel, n, [&](std::uint32_t b, std::uint32_t e) {
+    for (std::uint32_t i = b; i < e; ++i) logs[i] = fx::log(phi[i]);
+  });
+  fx::ExactSum j;
+  for (std::uint32_t i = 0; i < n; ++i) j.add_product(phi[i], logs[i]);
+  j.add(log_count(n));
+  Focus<Q32> f = make_result(std::move(phi), plan);
+  f.syntropy = j.round().to_double();
+  f.cyberank = rank_by(f.phi);
+  return f;
+}
+
+}  // namespace
+
 Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& p, double lambda2,
                                      const ProgressFn& progress, const FocusOptions& options) {
   return guarded([&]() -> Result<Focus<Q32>> {
     R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
     R1_ASSIGN(const auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
-    const std::uint32_t n = g.n;
-    const bool use_d = p.lambda_d.raw != 0, use_s = p.lambda_s.raw != 0, use_h = p.lambda_h.raw != 0;
-    const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
     std::vector<Q32> phi = project_to_simplex_q32(ops.prior());  // R1-FOC-012
-    std::vector<Q32> d, s, h, v(n);
-    for (std::uint32_t step = 0; step < plan.steps; ++step) {
-      // A zero-weight operator contributes exactly 0 and is skipped (R1-FOC-050).
-      if (use_d) ops.diffusion(phi, d);
-      if (use_s) ops.springs(phi, s);
-      if (use_h) focus::heat_q32(ops, heat, phi, h);
-      focus::for_rows(options.parallel, n, [&](std::uint32_t b, std::uint32_t e) {
-        for (std::uint32_t i = b; i < e; ++i) {
-          i128 acc = 0;  // three products below 2^96: exact
-          if (use_d) acc += static_cast<i128>(p.lambda_d.raw) * d[i].raw;
-          if (use_s) acc += static_cast<i128>(p.lambda_s.raw) * s[i].raw;
-          if (use_h) acc += static_cast<i128>(p.lambda_h.raw) * h[i].raw;
-          v[i] = Q32::from_raw(focus::round_q32(acc));
-        }
-      });
-      phi = project_to_simplex_q32(v);
-      report(progress, "focus", step + 1, plan.steps);
+    run_steps_q32(ops, p, plan.steps, g.n, std::uint64_t{1} << 32, options.parallel, phi, progress);
+    return finish_q32(std::move(phi), plan, options.parallel);
+  });
+}
+
+Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, double lambda2, std::span<const Q32> start,
+                                    std::span<const std::uint32_t> region, const ProgressFn& progress,
+                                    const FocusOptions& options) {
+  return guarded([&]() -> Result<Focus<Q32>> {
+    R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
+    if (start.size() != g.n)
+      return Status::input("focus update: " + std::to_string(start.size()) + " start values for " + std::to_string(g.n) + " particles");
+    std::vector<Q32> phi(start.begin(), start.end());
+    // The frozen particles keep their raws (each at least 1); the region holds the rest of 2^32
+    // (R1-INC-051).
+    std::vector<char> inside(g.n, 0);
+    for (const std::uint32_t i : region)
+      if (i < g.n) inside[i] = 1;
+    u128 frozen = 0;
+    for (std::uint32_t i = 0; i < g.n; ++i) {
+      if (inside[i]) continue;
+      if (phi[i].raw < 1) return Status::input("focus update: frozen particle " + std::to_string(i) + " has phi raw " + std::to_string(phi[i].raw) + " < 1");
+      frozen += static_cast<std::uint64_t>(phi[i].raw);
     }
-    // Syntropy: RNE(sum phi_i ln phi_i + ln n), an exact sum (R1-FOC-071).
-    std::vector<Q32> logs(n);
-    focus::for_rows(options.parallel, n, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t i = b; i < e; ++i) logs[i] = fx::log(phi[i]);
-    });
-    fx::ExactSum j;
-    for (std::uint32_t i = 0; i < n; ++i) j.add_product(phi[i], logs[i]);
-    j.add(log_count(n));
-    Focus<Q32> f = make_result(std::move(phi), plan);
-    f.syntropy = j.round().to_double();
-    f.cyberank = rank_by(f.phi);
-    return f;
+    const u128 one = u128{1} << 32;
+    if (frozen + region.size() > one)
+      return Status::input("focus update: the frozen particles hold " + std::to_string(static_cast<std::uint64_t>(frozen)) +
+                           " raws, leaving fewer than one for each of the region's " + std::to_string(region.size()) + " particles");
+    const auto total = static_cast<std::uint64_t>(one - frozen);
+    std::vector<std::uint32_t> global;
+    R1_ASSIGN(const auto ops, focus::OperatorsQ32::build_local(g, p, options.parallel, region, phi, global));
+    std::vector<Q32> x(global.size());
+    for (std::size_t a = 0; a < global.size(); ++a) x[a] = phi[global[a]];
+    const auto active = static_cast<std::uint32_t>(region.size());
+    // The heat term (R1-INC-052): inside the region's ring the walk runs on, beyond it the start
+    // holds. The ring stands in for the rest of the graph as fixed points, which the start is not,
+    // so the step uses H_exact(start) + H_local(x) - H_local(start): exact at the start (where the
+    // walk reaches K m hops: its own local operators over that reach, whose ring is too far to
+    // matter), and first order in x - start.
+    std::vector<std::int64_t> heat_offset;
+    if (p.lambda_h.raw != 0) {
+      const HeatCoefficients heat = heat_coefficients(p.tau, p.chebyshev_degree);
+      const std::uint32_t reach = heat.substeps * p.chebyshev_degree;
+      const std::vector<std::uint32_t> wide = within_hops(g, region, reach);
+      std::vector<std::uint32_t> wide_global;
+      R1_ASSIGN(const auto wide_ops, focus::OperatorsQ32::build_local(g, p, options.parallel, wide, phi, wide_global));
+      std::vector<Q32> xw(wide_global.size()), hw, hl;
+      for (std::size_t a = 0; a < wide_global.size(); ++a) xw[a] = phi[wide_global[a]];
+      focus::heat_q32(wide_ops, heat, xw, hw);
+      focus::heat_q32(ops, heat, x, hl);
+      heat_offset.resize(active);
+      for (std::uint32_t a = 0; a < active; ++a) {
+        const auto at = std::lower_bound(wide.begin(), wide.end(), region[a]) - wide.begin();
+        heat_offset[a] = hw[static_cast<std::size_t>(at)].raw - hl[a].raw;
+      }
+    }
+    // The start on R, projected onto the region's share (the identity when it already holds it).
+    std::vector<Q32> first(x.begin(), x.begin() + active);
+    focus::project_onto(first, total, std::span<Q32>(x).first(active));
+    run_steps_q32(ops, p, plan.steps, active, total, options.parallel, x, progress, heat_offset);
+    for (std::uint32_t a = 0; a < active; ++a) phi[global[a]] = x[a];
+    return finish_q32(std::move(phi), plan, options.parallel);
   });
 }
 

@@ -2,6 +2,7 @@
 // N x in Q32 and fp64 (R1-FOC-011, R1-FOC-020..041, R1-FOC-080..081, R1-FOC-090).
 #include "focus_operators.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "apportion.hpp"
@@ -84,6 +85,14 @@ void apportion_rows(const std::vector<std::uint64_t>& ptr, const std::vector<std
   }
 }
 
+// The prior u = apportion(2^32, d) (R1-FOC-011), raws.
+std::vector<std::int64_t> prior_raws(const Graph& g) {
+  std::vector<std::int64_t> share(g.n);
+  ApportionScratch scratch;
+  apportion_into(kOne, g.degree, share, scratch);
+  return share;
+}
+
 std::uint64_t row_sum(const std::vector<std::uint64_t>& ptr, const std::vector<std::int64_t>& w, std::uint32_t i) {
   std::uint64_t s = 0;
   for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += static_cast<std::uint64_t>(w[k]);
@@ -137,24 +146,137 @@ Result<OperatorsQ32> OperatorsQ32::build(const Graph& g, const TriKernelParams& 
     ops.walk_.resize(g.col.size());
     apportion_rows(g.row_ptr, g.w, mirror, ops.walk_);
   }
-  {
-    std::vector<std::int64_t> share(g.n);
-    ApportionScratch scratch;
-    apportion_into(kOne, g.degree, share, scratch);  // R1-FOC-011
-    ops.prior_.resize(g.n);
-    for (std::uint32_t i = 0; i < g.n; ++i) ops.prior_[i] = Q32::from_raw(share[i]);
-  }
-  ops.teleport_ = params.teleport.raw;
-  ops.one_minus_t_ = static_cast<std::int64_t>(kOne) - params.teleport.raw;  // exact
-  ops.mu_ = params.mu.raw;
+  const std::vector<std::int64_t> prior = prior_raws(g);
+  ops.prior_.resize(g.n);
+  for (std::uint32_t i = 0; i < g.n; ++i) ops.prior_[i] = Q32::from_raw(prior[i]);
+  ops.set_constants(params, g.n);
+  return ops;
+}
+
+void OperatorsQ32::set_constants(const TriKernelParams& params, std::uint32_t particles) {
+  teleport_ = params.teleport.raw;
+  one_minus_t_ = static_cast<std::int64_t>(kOne) - params.teleport.raw;  // exact
+  mu_ = params.mu.raw;
   // a = RNE(mu / n), the screening source mu x0 with x0 uniform (R1-FOC-030): the one rounding.
-  ops.springs_a_ = static_cast<std::int64_t>(fx::detail::rne_div(params.mu.raw, g.n));
+  springs_a_ = static_cast<std::int64_t>(fx::detail::rne_div(params.mu.raw, particles));
+}
+
+Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelParams& params, bool parallel,
+                                               std::span<const std::uint32_t> region, std::span<const Q32> phi,
+                                               std::vector<std::uint32_t>& local_to_global) {
+  // The graph is the caller's own layout graph (built and checked with it); only what this
+  // function indexes is checked here, so the cost stays with the region.
+  if (g.n == 0 || g.row_ptr.size() != std::size_t{g.n} + 1 || g.out_ptr.size() != std::size_t{g.n} + 1 ||
+      g.degree.size() != g.n)
+    return bad("array sizes");
+  if (phi.size() != g.n) return Status::input("focus update: phi has " + std::to_string(phi.size()) + " entries for " + std::to_string(g.n) + " particles");
+  if (region.empty()) return Status::input("focus update: empty region");
+  for (std::size_t a = 0; a < region.size(); ++a)
+    if (region[a] >= g.n || (a > 0 && region[a] <= region[a - 1]))
+      return Status::input("focus update: region entry " + std::to_string(a) + " out of range or out of order");
+  // where[i]: the local index of particle i, -1 outside R and its ring.
+  std::vector<std::int32_t> where(g.n, -1);
+  local_to_global.assign(region.begin(), region.end());
+  for (std::size_t a = 0; a < region.size(); ++a) where[region[a]] = static_cast<std::int32_t>(a);
+  const auto r = static_cast<std::uint32_t>(region.size());
+  {
+    std::vector<std::uint32_t> ring;
+    for (const std::uint32_t i : region)
+      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+        if (where[g.col[k]] == -1) {
+          where[g.col[k]] = -2;
+          ring.push_back(g.col[k]);
+        }
+    std::sort(ring.begin(), ring.end());
+    for (const std::uint32_t j : ring) {
+      where[j] = static_cast<std::int32_t>(local_to_global.size());
+      local_to_global.push_back(j);
+    }
+  }
+  const auto count = static_cast<std::uint32_t>(local_to_global.size());
+
+  OperatorsQ32 ops;
+  ops.parallel_ = parallel;
+  auto rows = std::make_shared<LocalRows>();
+  rows->row_ptr.assign(std::size_t{count} + 1, 0);
+  rows->degree.assign(count, 0);
+  for (std::uint32_t a = 0; a < r; ++a) {
+    const std::uint32_t i = region[a];
+    rows->row_ptr[a + 1] = rows->row_ptr[a] + (g.row_ptr[i + 1] - g.row_ptr[i]);
+    rows->degree[a] = g.degree[i];
+  }
+  for (std::uint32_t a = r; a < count; ++a) rows->row_ptr[a + 1] = rows->row_ptr[a];  // the ring: empty rows
+  rows->col.resize(rows->row_ptr[count]);
+  rows->w.resize(rows->row_ptr[count]);
+  ops.walk_.resize(rows->row_ptr[count]);
+
+  // Shares of a whole row of the graph, apportioned once per local particle that needs them.
+  ApportionScratch scratch;
+  std::vector<std::uint64_t> wbuf;
+  std::vector<std::int64_t> shares;
+  const auto shares_of = [&](std::vector<std::int64_t>& offset, std::uint32_t b, const std::vector<std::uint64_t>& ptr,
+                             const std::vector<std::int64_t>& weight) -> std::int64_t {
+    if (offset[b] >= 0) return offset[b];
+    const std::uint32_t j = local_to_global[b];
+    const std::uint64_t lo = ptr[j], hi = ptr[j + 1];
+    wbuf.assign(weight.begin() + static_cast<std::ptrdiff_t>(lo), weight.begin() + static_cast<std::ptrdiff_t>(hi));
+    offset[b] = static_cast<std::int64_t>(shares.size());
+    shares.resize(shares.size() + wbuf.size());
+    apportion_into(kOne, wbuf, std::span<std::int64_t>(shares).subspan(static_cast<std::size_t>(offset[b]), wbuf.size()), scratch);
+    return offset[b];
+  };
+  std::vector<std::int64_t> walk_offset(count, -1), out_offset(count, -1);
+  ops.pattern_.n = count;
+  ops.pattern_.in_ptr.assign(std::size_t{count} + 1, 0);
+  for (std::uint32_t a = 0; a < r; ++a) {
+    const std::uint32_t q = region[a];
+    std::uint64_t lk = rows->row_ptr[a];
+    for (std::uint64_t k = g.row_ptr[q]; k < g.row_ptr[q + 1]; ++k, ++lk) {
+      const std::uint32_t j = g.col[k];
+      const auto b = static_cast<std::uint32_t>(where[j]);
+      rows->col[lk] = b;
+      rows->w[lk] = g.w[k];
+      // N(q, j): q's share of row j (R1-FOC-041), row j's columns ascending.
+      const std::int64_t o = shares_of(walk_offset, b, g.row_ptr, g.w);
+      const auto first = g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[j]);
+      const auto last = g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[j + 1]);
+      const auto at = std::lower_bound(first, last, q);
+      if (at == last || *at != q) return bad("A_sym is not symmetric at (" + std::to_string(j) + ", " + std::to_string(q) + ")");
+      ops.walk_[lk] = shares[static_cast<std::size_t>(o + (at - first))];
+      // P(j, q) when j links to q: j's share of its out-row (R1-FOC-020); the in-links of q come
+      // out by ascending source as in build().
+      const auto ofirst = g.out_col.begin() + static_cast<std::ptrdiff_t>(g.out_ptr[j]);
+      const auto olast = g.out_col.begin() + static_cast<std::ptrdiff_t>(g.out_ptr[j + 1]);
+      const auto oat = std::lower_bound(ofirst, olast, q);
+      if (oat != olast && *oat == q) {
+        const std::int64_t oo = shares_of(out_offset, b, g.out_ptr, g.out_w);
+        ops.pattern_.in_src.push_back(b);
+        ops.in_p_.push_back(shares[static_cast<std::size_t>(oo + (oat - ofirst))]);
+      }
+    }
+    ops.pattern_.in_ptr[a + 1] = ops.pattern_.in_src.size();
+    if (g.out_ptr[q] == g.out_ptr[q + 1]) ops.pattern_.dangling.push_back(a);
+  }
+  for (std::uint32_t a = r; a < count; ++a) ops.pattern_.in_ptr[a + 1] = ops.pattern_.in_ptr[a];
+  // The frozen dangling mass: every dangling particle outside R keeps its phi.
+  for (std::uint32_t p = 0; p < g.n; ++p)
+    if (g.out_ptr[p] == g.out_ptr[p + 1] && (where[p] < 0 || static_cast<std::uint32_t>(where[p]) >= r))
+      ops.frozen_dangling_ += phi[p].raw;
+  const std::vector<std::int64_t> prior = prior_raws(g);
+  ops.prior_.assign(count, Q32{});
+  for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);
+  ops.set_constants(params, g.n);
+  ops.row_ptr_ = rows->row_ptr.data();
+  ops.col_ = rows->col.data();
+  ops.w_ = rows->w.data();
+  ops.degree_ = rows->degree.data();
+  ops.local_ = std::move(rows);
   return ops;
 }
 
 void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) const {
   out.resize(n());
-  i128 dangling_mass = 0;  // exact: at most n raws below 2^63
+  i128 dangling_mass = frozen_dangling_;  // exact: at most n raws below 2^63
   for (const std::uint32_t p : pattern_.dangling) dangling_mass += phi[p].raw;
   // c = RNE((1 - t) m + t): the dangling mass and the teleport both go to the prior.
   const std::int64_t c = round_q32(static_cast<i128>(one_minus_t_) * dangling_mass + (static_cast<i128>(teleport_) << 32));
@@ -279,3 +401,31 @@ void OperatorsF64::walk(std::span<const double> x, std::vector<double>& out) con
 }
 
 }  // namespace r1::focus
+
+namespace r1 {
+
+std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint32_t> seeds, std::uint32_t h) {
+  std::vector<char> in(g.n, 0);
+  std::vector<std::uint32_t> all, frontier;
+  for (const std::uint32_t s : seeds)
+    if (s < g.n && !in[s]) {
+      in[s] = 1;
+      frontier.push_back(s);
+    }
+  all = frontier;
+  for (std::uint32_t hop = 0; hop < h && !frontier.empty(); ++hop) {
+    std::vector<std::uint32_t> next;
+    for (const std::uint32_t i : frontier)
+      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+        if (!in[g.col[k]]) {
+          in[g.col[k]] = 1;
+          next.push_back(g.col[k]);
+        }
+    all.insert(all.end(), next.begin(), next.end());
+    frontier = std::move(next);
+  }
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+}  // namespace r1

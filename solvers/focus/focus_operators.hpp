@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -61,6 +62,18 @@ class OperatorsQ32 {
   // total degree; the parameters must be valid.
   static Result<OperatorsQ32> build(const Graph& g, const TriKernelParams& params, bool parallel);
 
+  // The operators of a region R of the graph for a local update (R1-INC-050): local index a <
+  // |R| is region[a] (ascending, distinct), the indices after it the ring of R's neighbours
+  // outside R, ascending; `local_to_global` receives that map. Rows of R are the graph's rows
+  // with the whole graph's shares (transition rows, walk columns, the prior, a = RNE(mu / n)), so
+  // with R = every particle the operators are those of build(). Ring rows are empty: a ring
+  // particle is a fixed point of the walk, as an isolated particle is (R1-FOC-041), and its
+  // diffusion and springs values are never used. The dangling mass adds `phi` summed exactly over
+  // the dangling particles outside R, which stay frozen. `phi` has one entry per particle.
+  static Result<OperatorsQ32> build_local(const Graph& g, const TriKernelParams& params, bool parallel,
+                                          std::span<const std::uint32_t> region, std::span<const Q32> phi,
+                                          std::vector<std::uint32_t>& local_to_global);
+
   std::uint32_t n() const { return pattern_.n; }
   const std::vector<Q32>& prior() const { return prior_; }
 
@@ -80,6 +93,8 @@ class OperatorsQ32 {
   bool parallel() const { return parallel_; }
 
  private:
+  void set_constants(const TriKernelParams& params, std::uint32_t particles);
+
   FocusPattern pattern_;
   bool parallel_ = false;
   const std::uint64_t* row_ptr_ = nullptr;  // the graph's A_sym CSR, borrowed (outlives *this)
@@ -90,6 +105,14 @@ class OperatorsQ32 {
   std::vector<std::int64_t> in_p_;   // P(p, q) per in-link, raw
   std::vector<std::int64_t> walk_;   // N(i, j) at A_sym entry (i, j), raw
   std::int64_t one_minus_t_ = 0, teleport_ = 0, mu_ = 0, springs_a_ = 0;
+  i128 frozen_dangling_ = 0;         // build_local: the dangling phi outside the region, exact
+  // build_local's rows (the pointers above point into it; shared, so copies stay valid).
+  struct LocalRows {
+    std::vector<std::uint64_t> row_ptr, degree;
+    std::vector<std::uint32_t> col;
+    std::vector<std::int64_t> w;
+  };
+  std::shared_ptr<const LocalRows> local_;
 };
 
 // ---- fp64 -----------------------------------------------------------------------------------------

@@ -66,19 +66,27 @@ void check_simplex_size(std::size_t n, const char* what) {
 }
 }  // namespace
 
-std::vector<Q32> project_to_simplex_q32(std::span<const Q32> v) {
-  check_simplex_size(v.size(), "project_to_simplex_q32");
+namespace focus {
+void project_onto(std::span<const Q32> v, std::uint64_t total, std::span<Q32> out) {
   const std::size_t n = v.size();
+  if (n == 0 || out.size() != n || total < n || total > (std::uint64_t{1} << 32))
+    throw std::invalid_argument("project_onto: need 1 <= entries <= total <= 2^32");
   // Reserve the floor of one raw per entry first (R1-FOC-051), then share out the rest in
   // proportion to each entry's excess over that floor.
-  const std::uint64_t rest = (std::uint64_t{1} << 32) - n;
+  const std::uint64_t rest = total - n;
   std::vector<std::uint64_t> excess(n);
   for (std::size_t i = 0; i < n; ++i) excess[i] = v[i].raw > 1 ? static_cast<std::uint64_t>(v[i].raw) - 1 : 0;
   std::vector<std::int64_t> share(n);
-  focus::ApportionScratch scratch;
-  focus::apportion_into(rest, excess, share, scratch);
-  std::vector<Q32> out(n);
+  ApportionScratch scratch;
+  apportion_into(rest, excess, share, scratch);
   for (std::size_t i = 0; i < n; ++i) out[i] = Q32::from_raw(share[i] + 1);
+}
+}  // namespace focus
+
+std::vector<Q32> project_to_simplex_q32(std::span<const Q32> v) {
+  check_simplex_size(v.size(), "project_to_simplex_q32");
+  std::vector<Q32> out(v.size());
+  focus::project_onto(v, std::uint64_t{1} << 32, out);
   return out;
 }
 

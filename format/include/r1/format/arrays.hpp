@@ -22,6 +22,9 @@ std::string q32_column(std::span<const fx::Q32> v);
 std::string q32_rows(std::span<const std::vector<fx::Q32>> columns, std::size_t rows);
 // x, y, z raws per particle (positions.q32, the anchor's and the golden positions' coordinates).
 std::string q32_triples(std::span<const std::array<fx::Q32, 3>> v);
+// u64 per entry (outrows.u64).
+std::string u64_column(std::span<const std::uint64_t> v);
+std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n);
 // Row-major u32: row i holds columns[0][i], columns[1][i], ... (clusters.u32: one per level).
 std::string u32_rows(std::span<const std::vector<std::uint32_t>> columns, std::size_t rows);
 

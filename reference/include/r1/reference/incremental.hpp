@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@ struct UpdateOptions {
   double full_norm = 0.05;              // ... or when the summed ||Delta L~|| bound exceeds this
   std::uint32_t krylov = 12;            // local basis vectors per eigenvector (R1-INC-031)
   bool force_full = false;              // always solve in full (r1 drift's oracle side)
+  bool keep_local = false;              // keep the local update when the certificate fails (R1-INC-036)
 };
 
 // The edit batch at the level of the layout graph (R1-INC-010..013).
@@ -39,6 +41,12 @@ struct EditBatch {
 // Compares the earlier epoch's layout graph (its edges.bin) with the next snapshot's. Input error
 // when the earlier epoch is not of this chain (an anchor particle of it is missing, R1-INC-002).
 Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& graph, const std::string& prev_name);
+
+// Per particle, the digest of its directed A0 row (R1-INC-011, outrows.u64 of R1-EPO-011): the sum
+// modulo 2^64 of splitmix64(t ^ splitmix64(w)) over its out-links, t the first 8 bytes of the
+// target's id (little-endian) and w the Q32 raw: independent of particle order, so rows of two
+// snapshots compare by id.
+std::vector<std::uint64_t> out_row_digests(const Graph& graph, std::span<const ParticleId> ids);
 
 // h of R1-INC-020 for eps and the springs screening mu.
 std::uint32_t hops_for(double eps, double mu);

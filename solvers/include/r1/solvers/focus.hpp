@@ -26,6 +26,18 @@ struct FocusOptions {
 // invariant: internal error. The Q32 phi raws sum to exactly 2^32 and are all >= 1.
 Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
                                      const ProgressFn& progress = {}, const FocusOptions& options = {});
+// The local update of an incremental epoch (R1-INC-050..053): the same T(eps) steps on the
+// particles of `region` (ascending, distinct) only, every other particle frozen at `start` (raws
+// at least 1, one entry per particle) and the region's ring held as fixed points of the walk;
+// each step projects the region onto the raws the frozen particles leave of 2^32, so the result
+// sums to exactly 2^32, every raw at least 1, and frozen particles keep their bits. With the
+// region every particle and `start` the projected prior it is compute_focus_q32's result. Input
+// error when the frozen raws leave fewer than one raw per region particle.
+Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
+                                    std::span<const Q32> start, std::span<const std::uint32_t> region,
+                                    const ProgressFn& progress = {}, const FocusOptions& options = {});
+// The particles within h hops of `seeds` in A_sym (breadth first), ascending (R1-INC-021).
+std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint32_t> seeds, std::uint32_t h);
 // The same algorithm in IEEE doubles with pairwise reductions (R1-FOC-080..083).
 Result<Focus<double>> compute_focus_f64(const Graph& g, const TriKernelParams& params, double lambda2,
                                         const ProgressFn& progress = {}, const FocusOptions& options = {});

@@ -99,6 +99,9 @@ struct Encoding {
   std::vector<Shape> shape;
   std::vector<std::array<std::uint8_t, 3>> color;  // display sRGB, 8 bits per channel
   std::string overlay = "none";                // none | crystal-v5 | custom
+  // b(p) of R1-ENC-012..014 behind the roles (empty when role shapes are off): an incremental
+  // epoch carries it instead of computing it again (R1-INC-037).
+  std::vector<double> betweenness;
 };
 
 // ---- hierarchy (R-1.0 10) ----------------------------------------------------------------------
@@ -152,6 +155,9 @@ struct UpdateInfo {
   std::uint64_t added = 0, dropped = 0;
   std::uint64_t resized_since_full = 0;  // particles added or dropped since the last full solve
   std::uint64_t region = 0;          // |N_h|
+  bool focus_local = false;          // phi updated on N_h only (R1-INC-050); false: the full iteration
+  bool certified = false;            // incremental with certificate <= eps_x (false: kept by --keep-local)
+  bool betweenness_carried = false;  // roles from the earlier epoch's betweenness (R1-INC-037)
   double delta_norm = 0;             // bound on ||L~_next - L~_prev||_2 of this batch
   double delta_norm_since_full = 0;  // the bound summed since the last full solve
   std::array<double, 6> full_eigenvalues{}, full_residuals{};  // of the last full solve
@@ -184,6 +190,7 @@ struct Epoch {
   Encoding encoding;
   Hierarchy hierarchy;
   std::vector<LayoutEdge> edges;           // layout graph pairs, by (p, q) ascending
+  std::vector<std::uint64_t> out_rows;     // per particle: digest of its directed A0 row (R1-EPO-011)
   std::vector<StageTiming> timings;
   std::optional<UpdateInfo> update;        // epochs made from an earlier one (r1 epoch --from)
 };

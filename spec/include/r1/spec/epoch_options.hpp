@@ -35,6 +35,9 @@ struct EncodingOptions {
   std::string custom_name;        // names the custom overlay in messages (its file, as given)
   bool role_shapes = true;        // shapes from roles (R1-ENC-019)
   BetweennessOptions betweenness; // exact size limit and pivots (R1-ENC-014)
+  // Betweenness to use instead of computing it (one value per particle, R1-INC-037): an
+  // incremental epoch's, carried from the earlier epoch. Unset: computed by R1-ENC-012..015.
+  std::shared_ptr<const std::vector<double>> carried_betweenness;
   bool parallel = false;          // TBB for betweenness and the per-particle loops: bit-identical results (R1-ENC-020)
 };
 

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Incremental epoch against the full epoch at scale (spec/incremental.md): for Barabasi-Albert
+# snapshots (m = 10) of each size, the full epoch (PREV), a batch of 10 links added between
+# particles drawn with a fixed seed outside the anchor set, and `r1 epoch NEXT --from PREV` with the
+# given update options; prints the stages of both epochs (seconds, from their manifests), |N_h|,
+# the sum of the stages, the wall time of the whole command (reading and writing included) and the
+# ratio of the two. Existing snapshots and PREV epochs in WORK_DIR are reused, with the wall time
+# of the run that made them (a full epoch of 10^6 particles takes about half an hour on two cores).
+# Usage: bench/incremental_scale.sh [R1_BINARY] [WORK_DIR] [SIZES...]   (sizes default: 10000 100000)
+# UPDATE_FLAGS: the update options (default: --hops 1 --keep-local --full-norm 1000, which time the
+# local path on graphs where no certificate holds); BACKEND: the backend (default cpu).
+set -euo pipefail
+r1=${1:-build/cli/r1}
+work=${2:-$(mktemp -d)}
+shift $(( $# > 2 ? 2 : $# ))
+sizes=("$@")
+[ ${#sizes[@]} -gt 0 ] || sizes=(10000 100000)
+flags=${UPDATE_FLAGS:---hops 1 --keep-local --full-norm 1000}
+backend=${BACKEND:-cpu}
+mkdir -p "$work"
+echo "r1 incremental scale: $(nproc) cores, backend $backend, update flags: $flags, work dir $work"
+printf '%-9s %-7s %6s %7s %7s %6s %6s %8s %6s %8s %9s %8s %8s %6s\n' particles path region read digest prev batch \
+  spectral focus encoding hierarchy stages wall ratio
+for n in "${sizes[@]}"; do
+  g="$work/ba-$n.graph"
+  [ -f "$g" ] || "$r1" gen ba --n "$n" --m 10 -o "$g" >/dev/null
+  [ -f "$work/ba-$n.epoch/manifest.json" ] ||
+    /usr/bin/time -f '%e' -o "$work/wall-$n" "$r1" epoch "$g" -q --backend "$backend" -o "$work/ba-$n.epoch"
+  # Ten new links between particles 1024.. (the anchor set stays as it was), by their ids.
+  python3 - "$work/ba-$n.epoch/particles.ids" > "$work/ba-$n.edits" <<'PY'
+import random, sys
+ids = open(sys.argv[1], "rb").read()
+n = len(ids) // 32
+r = random.Random(7)
+for _ in range(10):
+    a, b = r.randrange(1024, n), r.randrange(1024, n)
+    print("add\t%s\t%s\t1" % (ids[32 * a:32 * a + 32].hex(), ids[32 * b:32 * b + 32].hex()))
+PY
+  "$r1" edit "$g" "$work/ba-$n.edits" -o "$work/ba-$n-next.graph" >/dev/null
+  # shellcheck disable=SC2086
+  rm -rf "$work/ba-$n-next.epoch"
+  # shellcheck disable=SC2086
+  /usr/bin/time -f '%e' -o "$work/wall-$n-next" "$r1" epoch "$work/ba-$n-next.graph" --from "$work/ba-$n.epoch" $flags -q \
+    --backend "$backend" -o "$work/ba-$n-next.epoch"
+  python3 - "$work/ba-$n.epoch/manifest.json" "$work/ba-$n-next.epoch/manifest.json" "$work/wall-$n" "$work/wall-$n-next" <<'PY'
+import json, os, sys
+full, inc = (json.load(open(p)) for p in sys.argv[1:3])
+walls = [float(open(p).read().split()[-1]) if os.path.exists(p) else float("nan") for p in sys.argv[3:5]]
+keys = ("read", "digest", "previous", "batch", "spectral", "focus", "encoding", "hierarchy")
+def row(m, name, region, wall):
+    t = m["timings_s"]
+    cols = [t.get(k, 0.0) for k in keys]
+    print("%-9d %-7s %6s %7.2f %7.2f %6.2f %6.2f %8.2f %6.2f %8.2f %9.2f %8.2f %8.2f" % (
+        m["snapshot"]["particles"], name, region, *cols, sum(t.values()), wall), end="")
+tf = row(full, "full", "-", walls[0]); print()
+u = inc["update"]
+row(inc, "inc" if u["mode"] == "incremental" else "full*", str(u["region"]), walls[1])
+print(" %6.1f" % (walls[0] / walls[1]))
+if u["mode"] != "incremental":
+    print("          (solved in full: %s)" % u["reason"])
+PY
+done
