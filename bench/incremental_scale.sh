@@ -2,7 +2,8 @@
 # Incremental epoch against the full epoch at scale (spec/incremental.md): for Barabasi-Albert
 # snapshots (m = 10) of each size, the full epoch (PREV), a batch of 10 links added between
 # particles drawn with a fixed seed outside the anchor set, and `r1 epoch NEXT --from PREV` with the
-# given update options; prints the stages of both epochs (seconds, from their manifests), |N_h|,
+# given update options; prints |N_h|/|N_(h+1)| (region), the stages of both epochs (seconds, from their manifests; `cert` is
+# the incremental epoch's passes over every particle for the certificate, `spectral` its local work),
 # the sum of the stages, the wall time of the whole command (reading and writing included) and the
 # ratio of the two. Existing snapshots and PREV epochs in WORK_DIR are reused, with the wall time
 # of the run that made them (a full epoch of 10^6 particles takes about half an hour on two cores).
@@ -19,8 +20,8 @@ flags=${UPDATE_FLAGS:---hops 1 --keep-local --full-norm 1000}
 backend=${BACKEND:-cpu}
 mkdir -p "$work"
 echo "r1 incremental scale: $(nproc) cores, backend $backend, update flags: $flags, work dir $work"
-printf '%-9s %-7s %6s %7s %7s %6s %6s %8s %6s %8s %9s %8s %8s %6s\n' particles path region read digest prev batch \
-  spectral focus encoding hierarchy stages wall ratio
+printf '%-9s %-7s %15s %7s %7s %6s %6s %8s %6s %6s %8s %9s %8s %8s %6s\n' particles path region read digest prev batch \
+  spectral cert focus encoding hierarchy stages wall ratio
 for n in "${sizes[@]}"; do
   g="$work/ba-$n.graph"
   [ -f "$g" ] || "$r1" gen ba --n "$n" --m 10 -o "$g" >/dev/null
@@ -46,15 +47,15 @@ PY
 import json, os, sys
 full, inc = (json.load(open(p)) for p in sys.argv[1:3])
 walls = [float(open(p).read().split()[-1]) if os.path.exists(p) else float("nan") for p in sys.argv[3:5]]
-keys = ("read", "digest", "previous", "batch", "spectral", "focus", "encoding", "hierarchy")
+keys = ("read", "digest", "previous", "batch", "spectral", "certificate", "focus", "encoding", "hierarchy")
 def row(m, name, region, wall):
     t = m["timings_s"]
     cols = [t.get(k, 0.0) for k in keys]
-    print("%-9d %-7s %6s %7.2f %7.2f %6.2f %6.2f %8.2f %6.2f %8.2f %9.2f %8.2f %8.2f" % (
+    print("%-9d %-7s %15s %7.2f %7.2f %6.2f %6.2f %8.2f %6.2f %6.2f %8.2f %9.2f %8.2f %8.2f" % (
         m["snapshot"]["particles"], name, region, *cols, sum(t.values()), wall), end="")
 tf = row(full, "full", "-", walls[0]); print()
 u = inc["update"]
-row(inc, "inc" if u["mode"] == "incremental" else "full*", str(u["region"]), walls[1])
+row(inc, "inc" if u["mode"] == "incremental" else "full*", "%d/%d" % (u["region"], u["rows"]), walls[1])
 print(" %6.1f" % (walls[0] / walls[1]))
 if u["mode"] != "incremental":
     print("          (solved in full: %s)" % u["reason"])

@@ -69,6 +69,7 @@ json update_json(const UpdateInfo& u) {
           {"dropped", u.dropped},
           {"resized_since_full", u.resized_since_full},
           {"region", u.region},
+          {"rows", u.rows},
           {"focus", u.focus_local ? "local" : "full"},
           {"certified", u.certified},
           {"betweenness", u.betweenness_carried ? "carried" : "computed"},
@@ -92,6 +93,7 @@ UpdateInfo update_from(const json& j) {
   u.dropped = j.at("dropped").get<std::uint64_t>();
   u.resized_since_full = j.at("resized_since_full").get<std::uint64_t>();
   u.region = j.at("region").get<std::uint64_t>();
+  u.rows = j.at("rows").get<std::uint64_t>();
   u.focus_local = j.at("focus").get<std::string>() == "local";
   u.certified = j.at("certified").get<bool>();
   u.betweenness_carried = j.at("betweenness").get<std::string>() == "carried";

@@ -213,6 +213,25 @@ std::string reweight(const r1::Snapshot& s, const char* w) {
 }
 std::string small_reweight(const r1::Snapshot& s) { return reweight(s, "0.999"); }
 
+// NEXT = PREV's own snapshot: nothing is touched, the epoch is incremental and every particle
+// keeps its vectors, position and focus bit for bit (the focus update of an empty region is the
+// start, R1-INC-051).
+TEST(Incremental, AnEmptyBatchKeepsEverything) {
+  r1::UpdateOptions uo;
+  uo.hops = 2;
+  const UpdateRun r = incremental_run([](const r1::Snapshot&) { return std::string(); }, uo);
+  ASSERT_TRUE(r.epoch.update.has_value());
+  const r1::UpdateInfo& u = *r.epoch.update;
+  EXPECT_TRUE(u.incremental) << u.reason;
+  EXPECT_EQ(u.touched, 0u);
+  EXPECT_EQ(u.region, 0u);
+  EXPECT_TRUE(u.focus_local);
+  EXPECT_EQ(r.epoch.focus.phi, r.prev.focus.phi);
+  EXPECT_EQ(r.epoch.frame.position, r.prev.frame.position);
+  EXPECT_EQ(r.epoch.spectrum.u, r.prev.spectrum.u);
+  EXPECT_EQ(r.epoch.focus.cyberank, r.prev.focus.cyberank);
+}
+
 TEST(Incremental, CertifiedUpdateBoundsTheExactEigenvectorsAndFreezesTheRest) {
   r1::UpdateOptions uo;
   uo.hops = 3;

@@ -224,6 +224,13 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
       return Status::input("focus update: the frozen particles hold " + std::to_string(static_cast<std::uint64_t>(frozen)) +
                            " raws, leaving fewer than one for each of the region's " + std::to_string(region.size()) + " particles");
     const auto total = static_cast<std::uint64_t>(one - frozen);
+    // No region (an empty edit batch): nothing moves; the start must already be a focus.
+    if (region.empty()) {
+      if (total != 0)
+        return Status::input("focus update: no region, and the start sums to " + std::to_string(static_cast<std::uint64_t>(frozen)) +
+                             " raws, not 2^32");
+      return finish_q32(std::move(phi), plan, options.parallel);
+    }
     std::vector<std::uint32_t> global;
     R1_ASSIGN(const auto ops, focus::OperatorsQ32::build_local(g, p, options.parallel, region, phi, global));
     std::vector<Q32> x(global.size());
@@ -240,7 +247,12 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
       const std::uint32_t reach = heat.substeps * p.chebyshev_degree;
       const std::vector<std::uint32_t> wide = within_hops(g, region, reach);
       std::vector<std::uint32_t> wide_global;
-      R1_ASSIGN(const auto wide_ops, focus::OperatorsQ32::build_local(g, p, options.parallel, wide, phi, wide_global));
+      // A ball that holds every particle has no ring: its operators are the graph's own, which
+      // build() makes on every core (the same entries, R1-FOC-041; on small-world graphs the
+      // usual case, since K m hops cross them).
+      R1_ASSIGN(const auto wide_ops, wide.size() == g.n ? focus::OperatorsQ32::build(g, p, options.parallel)
+                                                        : focus::OperatorsQ32::build_local(g, p, options.parallel, wide, phi, wide_global));
+      if (wide.size() == g.n) wide_global = wide;
       std::vector<Q32> xw(wide_global.size()), hw, hl;
       for (std::size_t a = 0; a < wide_global.size(); ++a) xw[a] = phi[wide_global[a]];
       focus::heat_q32(wide_ops, heat, xw, hw);

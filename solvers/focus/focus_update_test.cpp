@@ -134,7 +134,13 @@ TEST(FocusUpdate, BadInputIsAnInputError) {
   const auto bad_order = r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{3, 2});
   ASSERT_FALSE(bad_order.is_ok());
   EXPECT_NE(bad_order.status().message().find("out of order"), std::string::npos);
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{}).is_ok());
+  // No region (an empty batch): the start, bit for bit, when it is a focus; else an input error.
+  const auto none = r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{});
+  ASSERT_TRUE(none.is_ok()) << none.status().message();
+  EXPECT_EQ(none->phi, start);
+  std::vector<Q32> short_start = start;
+  short_start[0] = Q32::from_raw(short_start[0].raw - 1);
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, short_start, std::vector<std::uint32_t>{}).is_ok());
   EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{12}).is_ok());
   EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, std::vector<Q32>(11, Q32::from_raw(1)), std::vector<std::uint32_t>{0}).is_ok());
   // Frozen particles that hold all 2^32 raws leave nothing for the region.

@@ -31,8 +31,9 @@ Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& para
 // at least 1, one entry per particle) and the region's ring held as fixed points of the walk;
 // each step projects the region onto the raws the frozen particles leave of 2^32, so the result
 // sums to exactly 2^32, every raw at least 1, and frozen particles keep their bits. With the
-// region every particle and `start` the projected prior it is compute_focus_q32's result. Input
-// error when the frozen raws leave fewer than one raw per region particle.
+// region every particle and `start` the projected prior it is compute_focus_q32's result; with no
+// region it is `start`. Input error when the frozen raws leave fewer than one raw per region
+// particle (with no region: when they do not sum to exactly 2^32).
 Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
                                     std::span<const Q32> start, std::span<const std::uint32_t> region,
                                     const ProgressFn& progress = {}, const FocusOptions& options = {});

@@ -155,6 +155,7 @@ struct UpdateInfo {
   std::uint64_t added = 0, dropped = 0;
   std::uint64_t resized_since_full = 0;  // particles added or dropped since the last full solve
   std::uint64_t region = 0;          // |N_h|
+  std::uint64_t rows = 0;            // |N_(h+1)|: the rows the local update reads (R1-INC-031)
   bool focus_local = false;          // phi updated on N_h only (R1-INC-050); false: the full iteration
   bool certified = false;            // incremental with certificate <= eps_x (false: kept by --keep-local)
   bool betweenness_carried = false;  // roles from the earlier epoch's betweenness (R1-INC-037)
