@@ -9,7 +9,8 @@
 # of the run that made them (a full epoch of 10^6 particles takes about half an hour on two cores).
 # Usage: bench/incremental_scale.sh [R1_BINARY] [WORK_DIR] [SIZES...]   (sizes default: 10000 100000)
 # UPDATE_FLAGS: the update options (default: --hops 1 --keep-local --full-norm 1000, which time the
-# local path on graphs where no certificate holds); BACKEND: the backend (default cpu).
+# local path on graphs where no certificate holds); BACKEND: the backend (default cpu); KIND: ba
+# (default) or rgg (3D geometric graphs of mean degree about 20 at every size: bounded degree).
 set -euo pipefail
 r1=${1:-build/cli/r1}
 work=${2:-$(mktemp -d)}
@@ -18,17 +19,25 @@ sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(10000 100000)
 flags=${UPDATE_FLAGS:---hops 1 --keep-local --full-norm 1000}
 backend=${BACKEND:-cpu}
+kind=${KIND:-ba}
 mkdir -p "$work"
-echo "r1 incremental scale: $(nproc) cores, backend $backend, update flags: $flags, work dir $work"
+echo "r1 incremental scale: $(nproc) cores, $kind graphs, backend $backend, update flags: $flags, work dir $work"
 printf '%-9s %-7s %15s %7s %7s %6s %6s %8s %6s %6s %8s %9s %8s %8s %6s\n' particles path region read digest prev batch \
   spectral cert focus encoding hierarchy stages wall ratio
 for n in "${sizes[@]}"; do
-  g="$work/ba-$n.graph"
-  [ -f "$g" ] || "$r1" gen ba --n "$n" --m 10 -o "$g" >/dev/null
-  [ -f "$work/ba-$n.epoch/manifest.json" ] ||
-    /usr/bin/time -f '%e' -o "$work/wall-$n" "$r1" epoch "$g" -q --backend "$backend" -o "$work/ba-$n.epoch"
+  g="$work/$kind-$n.graph"
+  if [ ! -f "$g" ]; then
+    case $kind in
+      ba) "$r1" gen ba --n "$n" --m 10 -o "$g" >/dev/null ;;
+      # Mean degree about 20 at every size: n (4/3) pi r^3 = 20 (a little less near the cube's faces).
+      rgg) "$r1" gen rgg --n "$n" --radius "$(python3 -c "import math; print((15 / (math.pi * $n)) ** (1 / 3))")" -o "$g" >/dev/null ;;
+      *) echo "incremental_scale: KIND is ba or rgg, not $kind" >&2; exit 2 ;;
+    esac
+  fi
+  [ -f "$work/$kind-$n.epoch/manifest.json" ] ||
+    /usr/bin/time -f '%e' -o "$work/wall-$kind-$n" "$r1" epoch "$g" -q --backend "$backend" -o "$work/$kind-$n.epoch"
   # Ten new links between particles 1024.. (the anchor set stays as it was), by their ids.
-  python3 - "$work/ba-$n.epoch/particles.ids" > "$work/ba-$n.edits" <<'PY'
+  python3 - "$work/$kind-$n.epoch/particles.ids" > "$work/$kind-$n.edits" <<'PY'
 import random, sys
 ids = open(sys.argv[1], "rb").read()
 n = len(ids) // 32
@@ -37,13 +46,13 @@ for _ in range(10):
     a, b = r.randrange(1024, n), r.randrange(1024, n)
     print("add\t%s\t%s\t1" % (ids[32 * a:32 * a + 32].hex(), ids[32 * b:32 * b + 32].hex()))
 PY
-  "$r1" edit "$g" "$work/ba-$n.edits" -o "$work/ba-$n-next.graph" >/dev/null
+  "$r1" edit "$g" "$work/$kind-$n.edits" -o "$work/$kind-$n-next.graph" >/dev/null
   # shellcheck disable=SC2086
-  rm -rf "$work/ba-$n-next.epoch"
+  rm -rf "$work/$kind-$n-next.epoch"
   # shellcheck disable=SC2086
-  /usr/bin/time -f '%e' -o "$work/wall-$n-next" "$r1" epoch "$work/ba-$n-next.graph" --from "$work/ba-$n.epoch" $flags -q \
-    --backend "$backend" -o "$work/ba-$n-next.epoch"
-  python3 - "$work/ba-$n.epoch/manifest.json" "$work/ba-$n-next.epoch/manifest.json" "$work/wall-$n" "$work/wall-$n-next" <<'PY'
+  /usr/bin/time -f '%e' -o "$work/wall-$kind-$n-next" "$r1" epoch "$work/$kind-$n-next.graph" --from "$work/$kind-$n.epoch" $flags -q \
+    --backend "$backend" -o "$work/$kind-$n-next.epoch"
+  python3 - "$work/$kind-$n.epoch/manifest.json" "$work/$kind-$n-next.epoch/manifest.json" "$work/wall-$kind-$n" "$work/wall-$kind-$n-next" <<'PY'
 import json, os, sys
 full, inc = (json.load(open(p)) for p in sys.argv[1:3])
 walls = [float(open(p).read().split()[-1]) if os.path.exists(p) else float("nan") for p in sys.argv[3:5]]

@@ -27,7 +27,7 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "r1-epoch";
-constexpr int kVersion = 3;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64
+constexpr int kVersion = 3;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64
 
 using format::kEdgeBytes;
 using format::q32_column;
