@@ -41,6 +41,19 @@ std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n) {
   return v;
 }
 
+std::string f64_column(std::span<const double> v) {
+  std::string o;
+  o.reserve(v.size() * 8);
+  for (const double x : v) put_f64(o, x);
+  return o;
+}
+
+std::vector<double> read_f64_column(std::string_view b, std::size_t n) {
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = load_f64(b.data() + i * 8);
+  return v;
+}
+
 std::string u32_rows(std::span<const std::vector<std::uint32_t>> columns, std::size_t rows) {
   std::string o;
   o.reserve(rows * columns.size() * 4);

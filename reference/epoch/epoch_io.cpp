@@ -13,7 +13,6 @@
 
 #include "../snapshot/text_util.hpp"
 #include "r1/format/arrays.hpp"
-#include "r1/format/bytes.hpp"
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/hierarchy.hpp"
@@ -160,10 +159,7 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
     if (e.encoding.betweenness.size() != n)
       return Status::internal("epoch: " + std::to_string(e.encoding.betweenness.size()) + " betweenness values for " + std::to_string(n) +
                               " particles");
-    std::string b;
-    b.reserve(n * 8);
-    for (const double x : e.encoding.betweenness) format::put_f64(b, x);
-    f.emplace_back("betweenness.f64", std::move(b));
+    f.emplace_back("betweenness.f64", format::f64_column(e.encoding.betweenness));
   }
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
@@ -427,13 +423,10 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   e.out_rows = format::read_u64_column(out_rows, n);
   if (files.find("betweenness.f64")) {
     R1_ASSIGN(const std::string_view b, files.rows("betweenness.f64", 8));
-    e.encoding.betweenness.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const double x = format::load_f64(b.data() + 8 * i);
-      if (!(x >= 0 && std::isfinite(x)))
+    e.encoding.betweenness = format::read_f64_column(b, n);
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(e.encoding.betweenness[i] >= 0 && std::isfinite(e.encoding.betweenness[i])))
         return Status::input((dir / "betweenness.f64").string() + ": byte " + std::to_string(8 * i) + ": not a finite betweenness >= 0");
-      e.encoding.betweenness[i] = x;
-    }
   }
   // The hierarchy the renderer walks: parsed, and checked against the particle data (R1-HIER-052).
   const std::string hier_path = (dir / "hierarchy.bin").string();

@@ -43,6 +43,7 @@ r1::Epoch synthetic(std::size_t n) {
   if (h.is_ok()) e.hierarchy = *h;
   for (std::uint32_t i = 0; i + 1 < n; ++i) e.edges.push_back({i, i + 1, Q32::kOneRaw / (i + 1), i % 2 ? -1 : 0});
   for (std::size_t i = 0; i < n; ++i) e.out_rows.push_back(0x9e3779b97f4a7c15ULL * (i + 1));
+  for (std::size_t i = 0; i < n; ++i) e.encoding.betweenness.push_back(0.1 * static_cast<double>(i) + 1.0 / 3.0);
   e.focus.cyberank = {2, 1, 0};
   e.spectrum.eigenvalues = {0, 0.1, 0.2, 0.3, 0.4, 0.5};
   e.timings = {{"spectral", 1.5}};
@@ -59,6 +60,7 @@ TEST(EpochIo, WriteReadRoundTrip) {
   EXPECT_EQ(back->titles, e.titles);
   EXPECT_EQ(back->focus.phi, e.focus.phi);
   EXPECT_EQ(back->out_rows, e.out_rows);
+  EXPECT_EQ(back->encoding.betweenness, e.encoding.betweenness);  // bit for bit
   EXPECT_EQ(back->frame.position, e.frame.position);
   EXPECT_EQ(back->spectrum.u, e.spectrum.u);
   EXPECT_EQ(back->encoding.role, e.encoding.role);

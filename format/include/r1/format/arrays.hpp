@@ -25,6 +25,9 @@ std::string q32_triples(std::span<const std::array<fx::Q32, 3>> v);
 // u64 per entry (outrows.u64).
 std::string u64_column(std::span<const std::uint64_t> v);
 std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n);
+// IEEE binary64 per entry, bit for bit (betweenness.f64).
+std::string f64_column(std::span<const double> v);
+std::vector<double> read_f64_column(std::string_view b, std::size_t n);
 // Row-major u32: row i holds columns[0][i], columns[1][i], ... (clusters.u32: one per level).
 std::string u32_rows(std::span<const std::vector<std::uint32_t>> columns, std::size_t rows);
 
