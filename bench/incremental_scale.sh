@@ -3,7 +3,8 @@
 # snapshots (m = 10) of each size, the full epoch (PREV), a batch of 10 links added between
 # particles drawn with a fixed seed outside the anchor set, and `r1 epoch NEXT --from PREV` with the
 # given update options; prints |N_h|/|N_(h+1)| (region), the stages of both epochs (seconds, from their manifests; `cert` is
-# the incremental epoch's passes over every particle for the certificate, `spectral` its local work),
+# the incremental epoch's carried sums and rows of N_(h+1) after the update, `spectral` its local
+# work, `carry` the O(|P|) gathering of PREV's vectors and image by particle),
 # the sum of the stages, the wall time of the whole command (reading and writing included) and the
 # ratio of the two. Existing snapshots and PREV epochs in WORK_DIR are reused, with the wall time
 # of the run that made them (a full epoch of 10^6 particles takes about half an hour on two cores).
@@ -22,8 +23,8 @@ backend=${BACKEND:-cpu}
 kind=${KIND:-ba}
 mkdir -p "$work"
 echo "r1 incremental scale: $(nproc) cores, $kind graphs, backend $backend, update flags: $flags, work dir $work"
-printf '%-9s %-7s %15s %7s %7s %6s %6s %8s %6s %6s %8s %9s %8s %8s %6s\n' particles path region read digest prev batch \
-  spectral cert focus encoding hierarchy stages wall ratio
+printf '%-9s %-7s %15s %7s %7s %6s %6s %6s %8s %6s %6s %8s %9s %8s %8s %6s\n' particles path region read digest prev batch \
+  carry spectral cert focus encoding hierarchy stages wall ratio
 for n in "${sizes[@]}"; do
   g="$work/$kind-$n.graph"
   if [ ! -f "$g" ]; then
@@ -56,11 +57,11 @@ PY
 import json, os, sys
 full, inc = (json.load(open(p)) for p in sys.argv[1:3])
 walls = [float(open(p).read().split()[-1]) if os.path.exists(p) else float("nan") for p in sys.argv[3:5]]
-keys = ("read", "digest", "previous", "batch", "spectral", "certificate", "focus", "encoding", "hierarchy")
+keys = ("read", "digest", "previous", "batch", "carry", "spectral", "certificate", "focus", "encoding", "hierarchy")
 def row(m, name, region, wall):
     t = m["timings_s"]
     cols = [t.get(k, 0.0) for k in keys]
-    print("%-9d %-7s %15s %7.2f %7.2f %6.2f %6.2f %8.2f %6.2f %6.2f %8.2f %9.2f %8.2f %8.2f" % (
+    print("%-9d %-7s %15s %7.2f %7.2f %6.2f %6.2f %6.2f %8.2f %6.2f %6.2f %8.2f %9.2f %8.2f %8.2f" % (
         m["snapshot"]["particles"], name, region, *cols, sum(t.values()), wall), end="")
 tf = row(full, "full", "-", walls[0]); print()
 u = inc["update"]

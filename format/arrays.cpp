@@ -41,6 +41,23 @@ std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n) {
   return v;
 }
 
+std::string i128_column(std::span<const i128> v) {
+  std::string o;
+  o.reserve(v.size() * 16);
+  for (const i128 x : v) {
+    put_u64(o, static_cast<std::uint64_t>(static_cast<u128>(x)));
+    put_u64(o, static_cast<std::uint64_t>(static_cast<u128>(x) >> 64));
+  }
+  return o;
+}
+
+std::vector<i128> read_i128_column(std::string_view b, std::size_t n) {
+  std::vector<i128> v(n);
+  for (std::size_t i = 0; i < n; ++i)
+    v[i] = static_cast<i128>((static_cast<u128>(load_u64(b.data() + i * 16 + 8)) << 64) | load_u64(b.data() + i * 16));
+  return v;
+}
+
 std::string f64_column(std::span<const double> v) {
   std::string o;
   o.reserve(v.size() * 8);

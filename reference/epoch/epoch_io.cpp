@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <fstream>
@@ -26,7 +27,8 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "r1-epoch";
-constexpr int kVersion = 3;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64
+constexpr int kVersion = 4;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64;
+                             // 4: residual_sums
 
 using format::kEdgeBytes;
 using format::q32_column;
@@ -55,6 +57,52 @@ json q32_json(Q32 q) { return q.to_exact_string(); }
 // JSON has no infinity: an unbounded certificate is written as null (R1-INC-040).
 json bound_json(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
 double bound_from(const json& j) { return j.is_null() ? std::numeric_limits<double>::infinity() : j.get<double>(); }
+
+// The carried residual sums (R1-INC-038): each exact integer as its three 64-bit two's complement
+// limbs, most significant first, 48 hex digits.
+json sums_json(const Spectrum<Q32>& s) {
+  json vectors = json::array();
+  for (const auto& v : s.sums) {
+    json three = json::array();
+    for (const fx::ExactSum& x : v) {
+      const auto l = x.limbs();
+      char b[49];
+      std::snprintf(b, sizeof b, "%016llx%016llx%016llx", static_cast<unsigned long long>(l[2]),
+                    static_cast<unsigned long long>(l[1]), static_cast<unsigned long long>(l[0]));
+      three.push_back(b);
+    }
+    vectors.push_back(three);
+  }
+  return {{"shift", s.sums_shift}, {"sums", vectors}};
+}
+
+Status sums_from(const json& j, Spectrum<Q32>& s, const std::string& manifest) {
+  const json& vectors = j.at("sums");
+  const int shift = j.at("shift").get<int>();
+  if (shift < 0 || shift > 16 || !vectors.is_array() || vectors.size() != 5)
+    return Status::input(manifest + ": residual_sums: a shift of 0..16 and five vectors expected");
+  for (std::size_t c = 0; c < 5; ++c) {
+    if (!vectors[c].is_array() || vectors[c].size() != 3) return Status::input(manifest + ": residual_sums: three sums per vector expected");
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::string h = vectors[c][k].is_string() ? vectors[c][k].get<std::string>() : "";
+      std::array<std::uint64_t, 3> l{};
+      bool ok = h.size() == 48;
+      for (std::size_t d = 0; ok && d < 48; ++d) {
+        const char ch = h[d];
+        const int v = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+        ok = v >= 0;
+        l[2 - d / 16] = (l[2 - d / 16] << 4) | static_cast<std::uint64_t>(v < 0 ? 0 : v);
+      }
+      if (!ok) return Status::input(manifest + ": residual_sums: vector " + std::to_string(c + 2) + ": not 48 lower-case hex digits");
+      s.sums[c][k] = fx::ExactSum::from_limbs(l);
+    }
+    // Sums of squares are never negative.
+    if (s.sums[c][0].signum() < 0 || s.sums[c][2].signum() < 0)
+      return Status::input(manifest + ": residual_sums: vector " + std::to_string(c + 2) + ": a negative sum of squares");
+  }
+  s.sums_shift = shift;
+  return Status::ok();
+}
 
 json update_json(const UpdateInfo& u) {
   json vb = json::array();
@@ -161,6 +209,13 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
                               " particles");
     f.emplace_back("betweenness.f64", format::f64_column(e.encoding.betweenness));
   }
+  // What an incremental epoch carries (R1-INC-038): the exact image numerators, five per particle.
+  if (e.spectrum.sums_shift >= 0) {
+    if (e.spectrum.image.size() != n * 5)
+      return Status::internal("epoch: " + std::to_string(e.spectrum.image.size()) + " image numerators for " + std::to_string(n) +
+                              " particles");
+    f.emplace_back("image.i128", format::i128_column(e.spectrum.image));
+  }
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
   for (std::size_t i = 0; i < anchor_count(n); ++i) anchor.entries.push_back({e.ids[i], e.frame.position[i]});
@@ -201,6 +256,7 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
   m["rho"] = e.spectrum.rho;
   m["spectral_work"] = {{"restarts", e.spectrum.restarts}, {"matvecs", e.spectrum.matvecs},
                          {"block_applications", e.spectrum.passes}};
+  if (e.spectrum.sums_shift >= 0) m["residual_sums"] = sums_json(e.spectrum);
   m["scale"] = e.frame.scale;
   const Alignment& a = e.frame.alignment;
   m["alignment"] = {{"genesis", a.genesis},         {"rotation", a.rotation},   {"scale", a.scale},
@@ -354,6 +410,7 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   e.spectrum.residuals = m.at("residuals").get<std::array<double, 6>>();
   e.spectrum.found = m.at("found").get<std::uint32_t>();
   e.spectrum.rho = m.at("rho").get<double>();
+  if (m.contains("residual_sums")) R1_TRY(sums_from(m.at("residual_sums"), e.spectrum, manifest));
   e.frame.scale = m.at("scale").get<double>();
   const json& al = m.at("alignment");
   Alignment& a = e.frame.alignment;
@@ -421,6 +478,11 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   R1_TRY(read_edges(files, dir / "edges.bin", n, m.at("snapshot").at("layout_edges").get<std::size_t>(), e));
   R1_ASSIGN(const std::string_view out_rows, files.rows("outrows.u64", 8));
   e.out_rows = format::read_u64_column(out_rows, n);
+  if (e.spectrum.sums_shift >= 0) {
+    if (!files.find("image.i128")) return Status::input(manifest + ": residual_sums without image.i128");
+    R1_ASSIGN(const std::string_view img, files.rows("image.i128", 80));
+    e.spectrum.image = format::read_i128_column(img, n * 5);
+  }
   if (files.find("betweenness.f64")) {
     R1_ASSIGN(const std::string_view b, files.rows("betweenness.f64", 8));
     e.encoding.betweenness = format::read_f64_column(b, n);

@@ -44,6 +44,15 @@ r1::Epoch synthetic(std::size_t n) {
   for (std::uint32_t i = 0; i + 1 < n; ++i) e.edges.push_back({i, i + 1, Q32::kOneRaw / (i + 1), i % 2 ? -1 : 0});
   for (std::size_t i = 0; i < n; ++i) e.out_rows.push_back(0x9e3779b97f4a7c15ULL * (i + 1));
   for (std::size_t i = 0; i < n; ++i) e.encoding.betweenness.push_back(0.1 * static_cast<double>(i) + 1.0 / 3.0);
+  // The carried image and sums (R1-INC-038): negative numerators and every limb in use.
+  e.spectrum.sums_shift = 2;
+  for (std::size_t i = 0; i < 5 * n; ++i) e.spectrum.image.push_back((r1::i128{1} << 100) / static_cast<r1::i128>(i + 1) - static_cast<r1::i128>(3 * i));
+  for (std::size_t c = 0; c < 5; ++c) {
+    e.spectrum.sums[c][0].add_term(r1::i128{1} << 120);
+    e.spectrum.sums[c][0].add_term(r1::i128{1} << 120);
+    e.spectrum.sums[c][1].add_term(-static_cast<r1::i128>(c + 7));
+    e.spectrum.sums[c][2].add_term(static_cast<r1::i128>(c));
+  }
   e.focus.cyberank = {2, 1, 0};
   e.spectrum.eigenvalues = {0, 0.1, 0.2, 0.3, 0.4, 0.5};
   e.timings = {{"spectral", 1.5}};
@@ -70,6 +79,9 @@ TEST(EpochIo, WriteReadRoundTrip) {
   EXPECT_EQ(back->hierarchy.tau0, e.hierarchy.tau0);
   EXPECT_EQ(back->edges, e.edges);
   EXPECT_EQ(back->spectrum.eigenvalues, e.spectrum.eigenvalues);
+  EXPECT_TRUE(back->spectrum.image == e.spectrum.image);
+  EXPECT_TRUE(back->spectrum.sums == e.spectrum.sums);
+  EXPECT_EQ(back->spectrum.sums_shift, 2);
   // Rewriting what was read gives the same files.
   r1::EpochWriteOptions quiet;
   quiet.timings = false;
@@ -107,6 +119,34 @@ TEST(EpochIo, ModifiedOrTruncatedFilesAreRefused) {
   fs::remove(d / "ep/role.u8");
   EXPECT_FALSE(r1::read_epoch(d / "ep").is_ok());
   EXPECT_FALSE(r1::read_epoch(d / "nothing").is_ok());
+}
+
+// The carried sums live in the manifest: a malformed one is refused with the member named.
+TEST(EpochIo, MalformedResidualSumsAreRefused) {
+  r1::test::TempDir d;
+  ASSERT_TRUE(r1::write_epoch(synthetic(6), d / "ep").is_ok());
+  const std::string manifest = r1::test::read_file(d / "ep/manifest.json");
+  auto m = nlohmann::json::parse(manifest);
+  const auto refused = [&](const nlohmann::json& bad, const std::string& what) {
+    r1::test::write_file(d / "ep/manifest.json", bad.dump(2));
+    auto r = r1::read_epoch(d / "ep");
+    ASSERT_FALSE(r.is_ok()) << what;
+    EXPECT_NE(r.status().message().find("manifest.json: residual_sums: " + what), std::string::npos) << r.status().message();
+  };
+  auto bad = m;
+  bad["residual_sums"]["sums"][1][2] = "xyz";
+  refused(bad, "vector 3: not 48 lower-case hex digits");
+  bad = m;
+  bad["residual_sums"]["sums"][0][0] = "f" + std::string(47, '0');  // a negative sum of squares
+  refused(bad, "vector 2: a negative sum of squares");
+  bad = m;
+  bad["residual_sums"]["shift"] = 40;
+  refused(bad, "a shift of 0..16 and five vectors expected");
+  bad = m;
+  bad["residual_sums"]["sums"].erase(4);
+  refused(bad, "a shift of 0..16 and five vectors expected");
+  r1::test::write_file(d / "ep/manifest.json", manifest);
+  EXPECT_TRUE(r1::read_epoch(d / "ep").is_ok());
 }
 
 // A writer that gets the digests right but the content wrong: the semantic checks still refuse it.

@@ -3,6 +3,8 @@
 // solve.
 #include "r1/reference/incremental.hpp"
 
+#include <boost/multiprecision/cpp_int.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -111,7 +113,9 @@ std::vector<std::uint32_t> neighbourhood(const Graph& g, const std::vector<std::
   return within_hops(g, seeds, h);
 }
 
-Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name) {
+namespace {
+
+Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name, const Rows& pr) {
   const std::size_t np = prev.ids.size(), n = next.particles.size();
   if (prev.out_rows.size() != np)
     return Status::input(prev_name + ": " + std::to_string(prev.out_rows.size()) + " out-row digests for " + std::to_string(np) +
@@ -131,9 +135,9 @@ Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Grap
       b.prev_of[static_cast<std::size_t>(next_of[p])] = static_cast<std::int64_t>(p);
     } else {
       ++b.dropped;
+      b.left.push_back(static_cast<std::uint32_t>(p));
     }
   }
-  const Rows pr = prev_rows(prev);
 
   // Row i's entries keyed by next column: the next graph's, and the earlier one's mapped; the M
   // entries only where the norm bound needs them (`with_m`; 0 otherwise).
@@ -220,28 +224,32 @@ Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Grap
   return b;
 }
 
+}  // namespace
+
+Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name) {
+  return batch_of(prev, next, g, prev_name, prev_rows(prev));
+}
+
 namespace {
 
 // The local least-squares correction of one vector (R1-INC-031), in fp64 over the rows of
 // N_(h+1) (compact indices), the correction supported on N_h.
+// M on the rows of N_(h+1) (compact, ascending) restricted to the columns of N_h.
 struct Local {
-  std::vector<std::uint32_t> rows;     // N_(h+1), ascending: global index of each compact row
-  std::vector<std::int32_t> where;     // per particle: compact row, or -1
-  std::vector<char> inner;             // per compact row: in N_h
-  const Q32* m = nullptr;              // M entries (raws) in the graph's entry order: the operator's own
+  std::vector<char> inner;         // per compact row: in N_h
+  std::vector<std::uint64_t> ptr;  // per compact row, its entries in N_h's columns, ascending
+  std::vector<std::uint32_t> col;  // compact column
+  std::vector<std::int64_t> m;     // M raw
+  std::size_t size() const { return inner.size(); }
 };
 
 // y = (L~ - theta) x on the compact rows, x zero outside N_h.
-void local_apply(const Graph& g, const Local& loc, const std::vector<double>& x, double theta, std::vector<double>& y) {
-  y.assign(loc.rows.size(), 0.0);
-  for (std::size_t a = 0; a < loc.rows.size(); ++a) {
-    const std::uint32_t i = loc.rows[a];
+void local_apply(const Local& loc, const std::vector<double>& x, double theta, std::vector<double>& y) {
+  y.assign(loc.size(), 0.0);
+  for (std::size_t a = 0; a < loc.size(); ++a) {
     double s = 0;
-    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
-      const std::int32_t b = loc.where[g.col[k]];
-      if (b >= 0 && loc.inner[static_cast<std::size_t>(b)])
-        s = s + static_cast<double>(loc.m[k].raw) * 0x1p-32 * x[static_cast<std::size_t>(b)];
-    }
+    for (std::uint64_t k = loc.ptr[a]; k < loc.ptr[a + 1]; ++k)
+      s = s + static_cast<double>(loc.m[k]) * 0x1p-32 * x[loc.col[k]];
     y[a] = (1 - theta) * x[a] - s;
   }
 }
@@ -266,9 +274,8 @@ std::vector<double> orthogonalise(std::vector<double>& v, const std::vector<std:
 
 // z on the compact rows (zero outside N_h) minimising ||r + (L~ - theta) z|| over the Krylov
 // space of the residual restricted to N_h.
-std::vector<double> local_correction(const Graph& g, const Local& loc, const std::vector<double>& r, double theta,
-                                     std::uint32_t krylov) {
-  const std::size_t rn = loc.rows.size();
+std::vector<double> local_correction(const Local& loc, const std::vector<double>& r, double theta, std::uint32_t krylov) {
+  const std::size_t rn = loc.size();
   std::vector<double> z(rn, 0.0);
   std::vector<double> v(rn, 0.0);
   for (std::size_t a = 0; a < rn; ++a)
@@ -283,7 +290,7 @@ std::vector<double> local_correction(const Graph& g, const Local& loc, const std
     const double nv = std::sqrt(dot(v, v));
     if (!(nv > 1e-12 * v0)) break;
     for (double& x : v) x = x / nv;
-    local_apply(g, loc, v, theta, y);
+    local_apply(loc, v, theta, y);
     std::vector<double> cj = y;
     std::vector<double> col = orthogonalise(cj, qc);
     const double nc = std::sqrt(dot(cj, cj));
@@ -312,43 +319,67 @@ std::vector<double> local_correction(const Graph& g, const Local& loc, const std
   return z;
 }
 
-// Rayleigh quotients and residual norms of the five columns of u (n x 5, raws scaled by 2^shift)
-// under the operator, exact products and dots (R1-INC-032): theta_c, rho_c (for the unit vector,
-// rounding of the application included) and the scaled norms.
+using Sums = std::array<std::array<fx::ExactSum, 3>, 5>;
+
+boost::multiprecision::cpp_int big(const fx::ExactSum& x) {
+  const auto l = x.limbs();
+  boost::multiprecision::cpp_int v = l[2];
+  v = (v << 64) | l[1];
+  v = (v << 64) | l[0];
+  if ((l[2] >> 63) != 0) v -= boost::multiprecision::cpp_int(1) << 192;
+  return v;
+}
+
+// A non-negative integer times 2^-k as a double: its top 63 bits, rounded once.
+double big_to_double(boost::multiprecision::cpp_int v, int k) {
+  if (v <= 0) return 0;
+  const auto top = static_cast<int>(boost::multiprecision::msb(v));
+  if (top > 62) {
+    v >>= top - 62;
+    k -= top - 62;
+  }
+  return std::ldexp(static_cast<double>(static_cast<std::uint64_t>(v)), -k);
+}
+
+// Rayleigh quotients and residual norms of the five vectors from their exact sums (R1-INC-032,
+// R1-INC-038): theta = S_xy / S_xx, and ||y - theta x||^2 = S_yy - 2 theta S_xy + theta^2 S_xx
+// evaluated exactly at the double theta; rho for the unit vector, the rounding of y included.
 struct Residuals {
   std::array<double, 5> theta{}, rho{}, norm{};
-  std::vector<Q32> y;  // L~ u, n x 5
 };
-Residuals residuals(const SpectralOperator<Q32>& op, const std::vector<Q32>& u, int shift, bool parallel) {
-  const std::size_t n = op.n;
+Residuals residuals_of(const Sums& sums, std::size_t n, int shift) {
+  using boost::multiprecision::cpp_int;
   Residuals out;
-  out.y.resize(n * 5);
-  std::vector<Q32>& y = out.y;
-  op.apply_block(u.data(), 5, y.data(), 5, 5, parallel);
   for (std::size_t c = 0; c < 5; ++c) {
-    fx::ExactSum uu, uy;
-    for (std::size_t i = 0; i < n; ++i) {
-      uu.add_product(u[i * 5 + c], u[i * 5 + c]);
-      uy.add_product(u[i * 5 + c], y[i * 5 + c]);
-    }
-    const double nn = spectral::to_double_scaled(uu, 64), ny = spectral::to_double_scaled(uy, 64);
+    const double nn = spectral::to_double_scaled(sums[c][0], 64), ny = spectral::to_double_scaled(sums[c][1], 64);
     if (!(nn > 0)) {
       out.theta[c] = 0;
       out.rho[c] = kInf;
       continue;
     }
     const double theta = ny / nn;
-    double rr = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double e = static_cast<double>(y[i * 5 + c].raw) - theta * static_cast<double>(u[i * 5 + c].raw);
-      rr = rr + e * e;
-    }
+    // theta = t 2^-q exactly, t an integer of at most 53 bits.
+    int ex = 0;
+    const double mant = std::frexp(theta, &ex);
+    const auto t = static_cast<std::int64_t>(std::ldexp(mant, 53));
+    const int q = t == 0 ? 0 : 53 - ex;
+    const cpp_int tb(t);
+    cpp_int rr = big(sums[c][2]);
+    rr <<= 2 * q;
+    cpp_int cross = big(sums[c][1]);
+    cross *= tb;
+    cross <<= q + 1;
+    rr -= cross;
+    cpp_int square = big(sums[c][0]);
+    square *= tb;
+    square *= tb;
+    rr += square;
     const double len = std::sqrt(nn);  // value units
-    // Each applied entry is within half a raw of exact: sqrt(n) / 2 raws in all; the fp64 sums
-    // above are within a relative 1e-12 of exact for any n r1 holds.
+    // Each applied entry is within half a raw of exact: sqrt(n) / 2 raws in all; the conversions
+    // above are within a relative 2^-52.
     const double apply_err = 0.5 * std::sqrt(static_cast<double>(n)) * 0x1p-32;
     out.theta[c] = theta;
-    out.rho[c] = (std::sqrt(rr) * 0x1p-32 * (1 + 1e-12) + apply_err) / len;
+    out.rho[c] = (std::sqrt(big_to_double(rr, 2 * q)) * 0x1p-32 * (1 + 1e-12) + apply_err) / len;
     out.norm[c] = len / std::ldexp(1.0, shift);
   }
   return out;
@@ -425,7 +456,8 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
   const auto batch_start = std::chrono::steady_clock::now();
-  R1_ASSIGN(EditBatch batch, edit_batch(prev, next, g, prev_name));
+  const Rows pr = prev_rows(prev);
+  R1_ASSIGN(EditBatch batch, batch_of(prev, next, g, prev_name, pr));
   const std::size_t n = g.n;
 
   UpdateInfo info;
@@ -489,63 +521,136 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   const auto since = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
-  double global_s = 0;
-  auto t_global = std::chrono::steady_clock::now();
-  R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
-  const int shift = op.e / 2;  // vectors scaled by 2^shift: the operator's rounding shrinks by as much
+  double global_s = 0, carry_s = 0;
+  const int shift = spectral::scale_exponent(static_cast<std::uint32_t>(n)) / 2;  // vectors scaled by 2^shift: the operator's rounding shrinks by as much
+  const std::int64_t scale = std::int64_t{1} << shift;
   // Unit vectors have entries of magnitude at most 1 (2^32 raws; a little more after updates): an
   // epoch whose spectral.q32 says otherwise was not written by r1.
   for (std::size_t c = 0; c < 5; ++c)
     for (const Q32 x : prev.spectrum.u[c])
       if (x.raw > (std::int64_t{1} << 33) || x.raw < -(std::int64_t{1} << 33))
         return Status::input(prev_name + "/spectral.q32: u_" + std::to_string(c + 2) + " has an entry beyond 2 (not a unit vector)");
-  std::vector<Q32> u(n * 5);
-  for (std::size_t i = 0; i < n; ++i)
-    if (batch.prev_of[i] >= 0)
-      for (std::size_t c = 0; c < 5; ++c)
-        u[i * 5 + c] = Q32::from_raw(prev.spectrum.u[c][static_cast<std::size_t>(batch.prev_of[i])].raw * (std::int64_t{1} << shift));
-  const Residuals before_update = residuals(op, u, shift, options.parallel);
-  global_s += since(t_global);
-
-  Local loc;
-  loc.rows = neighbourhood(g, batch.touched, info.hops + 1);
-  info.rows = loc.rows.size();
-  loc.where.assign(n, -1);
-  for (std::size_t a = 0; a < loc.rows.size(); ++a) loc.where[loc.rows[a]] = static_cast<std::int32_t>(a);
-  loc.inner.assign(loc.rows.size(), 0);
-  for (std::uint32_t i : nh) loc.inner[static_cast<std::size_t>(loc.where[i])] = 1;
-  loc.m = op.m.data();
-
+  const std::size_t np = prev.ids.size();
+  const bool sums_carried = prev.spectrum.sums_shift == shift && prev.spectrum.image.size() == np * 5;
+  // Per next particle: the stored raws (an added particle 0), the start of the update and, outside
+  // N_h, the result; and the image numerators of L~_next applied to them.
+  auto t_carry = std::chrono::steady_clock::now();
   std::array<std::vector<Q32>, 5> out;
   for (std::size_t c = 0; c < 5; ++c) {
     out[c].resize(n);
     for (std::size_t i = 0; i < n; ++i)
       out[c][i] = batch.prev_of[i] >= 0 ? prev.spectrum.u[c][static_cast<std::size_t>(batch.prev_of[i])] : Q32{};
-    if (loc.rows.empty()) continue;
+  }
+  std::vector<i128> image(n * 5, 0);
+  if (sums_carried)
+    for (std::size_t i = 0; i < n; ++i)
+      if (batch.prev_of[i] >= 0)
+        std::copy_n(&prev.spectrum.image[static_cast<std::size_t>(batch.prev_of[i]) * 5], 5, &image[i * 5]);
+  std::vector<std::int32_t> where(n, -1);  // per particle: its compact row in N_(h+1), or -1
+  carry_s += since(t_carry);
+
+  // The rows (R1-INC-038): N_(h+1), the only rows of L~ u the batch and the update change; of them
+  // F = N_max(h,1), whose own rows changed or whose own entries move, are computed in full, and
+  // the rest only through their entries in N_h.
+  const std::vector<std::uint32_t> rows = neighbourhood(g, batch.touched, info.hops + 1);
+  info.rows = rows.size();
+  const std::vector<std::uint32_t> full_rows = info.hops >= 1 ? nh : neighbourhood(g, batch.touched, 1);
+  const RowOperatorQ32 next_op = RowOperatorQ32::build(g.row_ptr, g.col, g.w, g.degree, full_rows, options.parallel);
+
+  // The exact sums before the update: the earlier epoch's with the particles that left and the rows
+  // of F taken out and F's rows under the next operator put in; without carried sums at this
+  // scale, one exact pass over every particle.
+  auto t_global = std::chrono::steady_clock::now();
+  Sums sums{};
+  if (sums_carried) {
+    sums = prev.spectrum.sums;
+    for (const std::uint32_t p : batch.left) spectral::add_row_sums(prev.spectrum.u, shift, p, &prev.spectrum.image[std::size_t{p} * 5], -1, sums);
+    for (const std::uint32_t i : full_rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, sums);
+    next_op.numerators(out, shift, image, options.parallel);
+    for (const std::uint32_t i : full_rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], 1, sums);
+  } else {
+    R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
+    spectral::image_and_sums(op, out, shift, image, sums, options.parallel);
+  }
+  const Residuals before_update = residuals_of(sums, n, shift);
+  // Without the rows of N_(h+1): the update's terms go back in after it.
+  Sums base = sums;
+  for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, base);
+  global_s += since(t_global);
+
+  // M restricted to the columns of N_h, by compact row (ascending columns, as the rows are stored):
+  // the transpose of N_h's rows, M being exactly symmetric.
+  for (std::size_t a = 0; a < rows.size(); ++a) where[rows[a]] = static_cast<std::int32_t>(a);
+  Local loc;
+  loc.inner.assign(rows.size(), 0);
+  for (const std::uint32_t i : nh) loc.inner[static_cast<std::size_t>(where[i])] = 1;
+  {
+    std::vector<std::uint32_t> row_of(full_rows.size());  // next_op's row of each particle of N_h, by N_h's order
+    std::size_t r = 0;
+    for (std::size_t j = 0; j < nh.size(); ++j) {
+      while (full_rows[r] != nh[j]) ++r;
+      row_of[j] = static_cast<std::uint32_t>(r);
+    }
+    loc.ptr.assign(rows.size() + 1, 0);
+    for (std::size_t j = 0; j < nh.size(); ++j)
+      for (std::uint64_t k = next_op.ptr[row_of[j]]; k < next_op.ptr[row_of[j] + 1]; ++k) ++loc.ptr[static_cast<std::size_t>(where[next_op.col[k]]) + 1];
+    for (std::size_t a = 0; a < rows.size(); ++a) loc.ptr[a + 1] += loc.ptr[a];
+    loc.col.resize(loc.ptr.back());
+    loc.m.resize(loc.ptr.back());
+    std::vector<std::uint64_t> fill(loc.ptr.begin(), loc.ptr.end() - 1);
+    for (std::size_t j = 0; j < nh.size(); ++j)
+      for (std::uint64_t k = next_op.ptr[row_of[j]]; k < next_op.ptr[row_of[j] + 1]; ++k) {
+        const std::uint64_t o = fill[static_cast<std::size_t>(where[next_op.col[k]])]++;
+        loc.col[o] = static_cast<std::uint32_t>(where[nh[j]]);
+        loc.m[o] = next_op.m[k].raw;
+      }
+  }
+  // The raws of N_h before the update, for the rows outside F.
+  std::vector<std::int64_t> start_raw(nh.size() * 5);
+  for (std::size_t j = 0; j < nh.size(); ++j)
+    for (std::size_t c = 0; c < 5; ++c) start_raw[j * 5 + c] = out[c][nh[j]].raw;
+
+  for (std::size_t c = 0; c < 5 && !rows.empty(); ++c) {
     // The residual on the compact rows, value units of the scaled vector, from the exact product.
     const double theta = before_update.theta[c];
-    std::vector<double> x(loc.rows.size()), r(loc.rows.size());
-    for (std::size_t a = 0; a < loc.rows.size(); ++a) {
-      const std::size_t k = std::size_t{loc.rows[a]} * 5 + c;
-      x[a] = static_cast<double>(u[k].raw) * 0x1p-32;
-      r[a] = (static_cast<double>(before_update.y[k].raw) - theta * static_cast<double>(u[k].raw)) * 0x1p-32;
+    std::vector<double> x(rows.size()), r(rows.size());
+    for (std::size_t a = 0; a < rows.size(); ++a) {
+      const double u = static_cast<double>(out[c][rows[a]].raw * scale);
+      x[a] = u * 0x1p-32;
+      r[a] = (static_cast<double>(spectral::image_raw(image[std::size_t{rows[a]} * 5 + c])) - theta * u) * 0x1p-32;
     }
-    const std::vector<double> z = local_correction(g, loc, r, theta, uo.krylov);
+    const std::vector<double> z = local_correction(loc, r, theta, uo.krylov);
     // Stored vector: the earlier raw plus the correction, rounded once to the unit-norm scale.
     const double to_raw = std::ldexp(1.0, 32 - shift);
-    for (std::size_t a = 0; a < loc.rows.size(); ++a) {
+    for (std::size_t a = 0; a < rows.size(); ++a) {
       if (!loc.inner[a]) continue;
       const double v = std::nearbyint((x[a] + z[a]) * to_raw);
       if (!(std::fabs(v) < 0x1p62)) return Status::internal("incremental update: a vector entry leaves the Q32 range");
-      out[c][loc.rows[a]] = Q32::from_raw(static_cast<std::int64_t>(v));
+      out[c][rows[a]] = Q32::from_raw(static_cast<std::int64_t>(v));
     }
   }
 
   // ---- the certificate (R1-INC-032) ----
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t c = 0; c < 5; ++c) u[i * 5 + c] = Q32::from_raw(out[c][i].raw * (std::int64_t{1} << shift));
   t_global = std::chrono::steady_clock::now();
-  const Residuals after = residuals(op, u, shift, options.parallel);
+  // F's rows in full; every other row of N_(h+1) moves by its entries in N_h times the change.
+  next_op.numerators(out, shift, image, options.parallel);
+  {
+    std::vector<std::int64_t> delta(rows.size() * 5, 0);
+    for (std::size_t j = 0; j < nh.size(); ++j)
+      for (std::size_t c = 0; c < 5; ++c)
+        delta[static_cast<std::size_t>(where[nh[j]]) * 5 + c] = (out[c][nh[j]].raw - start_raw[j * 5 + c]) * scale;
+    std::vector<char> in_full(rows.size(), 0);
+    for (const std::uint32_t i : full_rows) in_full[static_cast<std::size_t>(where[i])] = 1;
+    for (std::size_t a = 0; a < rows.size(); ++a) {
+      if (in_full[a]) continue;
+      for (std::uint64_t k = loc.ptr[a]; k < loc.ptr[a + 1]; ++k)
+        for (std::size_t c = 0; c < 5; ++c)
+          image[std::size_t{rows[a]} * 5 + c] -= static_cast<i128>(loc.m[k]) * delta[std::size_t{loc.col[k]} * 5 + c];
+    }
+  }
+  sums = base;
+  for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], 1, sums);
+  const Residuals after = residuals_of(sums, n, shift);
   global_s += since(t_global);
   // lambda_i(L~_next) lies within rho_i^full + sum ||Delta L~|| of the full solve's value (Weyl).
   std::array<double, 6> lo{}, hi{};
@@ -579,7 +684,7 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
                                             : "no certificate: particles changed and an eigenvalue bound reaches 1"));
 
   // ---- the incremental epoch ----
-  const double spectral_s = since(clock) - global_s;
+  const double spectral_s = since(clock) - global_s - carry_s;
   Epoch e = epoch_header(next, g, options);  // the digest: after the decision, which a full solve repeats
   Spectrum<Q32>& s = e.spectrum;
   s.n = static_cast<std::uint32_t>(n);
@@ -592,11 +697,15 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
     s.residuals[c + 1] = after.rho[c];
   }
   s.u = std::move(out);
-  s.matvecs = 10;  // two block applications for the residuals
+  s.sums = sums;
+  s.sums_shift = shift;
+  s.image = std::move(image);
+  s.matvecs = 10;  // two applications of the rows for the residuals (one block product each)
   s.passes = 2;
   e.timings.push_back({"batch", batch_s});  // the edit batch and N_h (R1-INC-010..021)
+  e.timings.push_back({"carry", carry_s});  // PREV's vectors and image gathered by particle: O(|P|) copies
   e.timings.push_back({std::string(stage_name(Stage::kSpectral)), spectral_s});  // the local update on N_h
-  e.timings.push_back({"certificate", global_s});  // the operator and its two exact products over all particles
+  e.timings.push_back({"certificate", global_s});  // the carried sums (or, without them, a product over all particles)
   clock = std::chrono::steady_clock::now();
   const double lambda2 = s.eigenvalues[1];
   {

@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <rapidcheck.h>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <functional>
 #include <set>
@@ -230,6 +231,61 @@ TEST(Incremental, AnEmptyBatchKeepsEverything) {
   EXPECT_EQ(r.epoch.frame.position, r.prev.frame.position);
   EXPECT_EQ(r.epoch.spectrum.u, r.prev.spectrum.u);
   EXPECT_EQ(r.epoch.focus.cyberank, r.prev.focus.cyberank);
+}
+
+// What an epoch carries for the next one's certificate (R1-INC-038) is, after every epoch of a
+// chain, exactly what one pass over every particle of its own graph gives: the image numerators
+// of L~ u and the three sums per vector. The chain adds links, reweights, adds a particle and
+// drops one, at h = 0, 1 and 2, so rows of F and rows reached only through N_h both change.
+TEST(Incremental, TheCarriedImageAndSumsAreTheWholeGraphsBitForBit) {
+  r1::Snapshot s = rgg(1200, 5);
+  r1::Epoch prev = full_epoch(s);
+  const auto check = [](const r1::Epoch& e, const r1::Graph& g, const std::string& what) {
+    auto op = r1::spectral_operator_q32(g, r1::SpectralParams{});
+    ASSERT_TRUE(op.is_ok());
+    ASSERT_GE(e.spectrum.sums_shift, 0) << what;
+    std::vector<r1::i128> image;
+    r1::spectral::ResidualSums sums;
+    r1::spectral::image_and_sums(*op, e.spectrum.u, op->e / 2, image, sums);
+    EXPECT_EQ(e.spectrum.sums_shift, op->e / 2) << what;
+    EXPECT_TRUE(image == e.spectrum.image) << what;
+    EXPECT_TRUE(sums == e.spectrum.sums) << what;
+  };
+  check(prev, graph(s), "the full epoch");
+  const r1::Anchor anchor = r1::make_anchor(s, prev.frame);
+  for (std::uint32_t hops = 0; hops < 3; ++hops) {
+    const std::size_t k = 40 + 97 * hops;
+    std::string batch = "reweight\t" + s.names[s.links[k].from] + "\t" + s.names[s.links[k].to] + "\t0.75\n";
+    batch += "add\t" + s.names[1100 - hops] + "\t" + s.names[1030 + hops] + "\t0.5\n";
+    batch += "add\t" + s.names[1050] + "\tnewcomer" + std::to_string(hops) + "\t0.5\n";
+    if (hops == 1) {
+      const std::string lone = s.names.back();
+      for (const r1::Link& l : s.links)
+        if (s.names[l.from] == lone || s.names[l.to] == lone) batch += "remove\t" + s.names[l.from] + "\t" + s.names[l.to] + "\n";
+    }
+    r1::Snapshot next = edited(s, batch);
+    const r1::Graph g = graph(next);
+    r1::UpdateOptions uo;
+    uo.hops = hops;
+    uo.keep_local = true;
+    uo.full_norm = 1000;  // new low-degree links move L~ by more than R-1.0's 0.05
+    r1::ReferenceStages stages;
+    auto e = r1::run_epoch_from(prev, anchor, "prev", next, g, r1::EpochOptions{}, uo, stages);
+    ASSERT_TRUE(e.is_ok()) << e.status().message();
+    ASSERT_TRUE(e->update->incremental) << e->update->reason;
+    check(*e, g, "h = " + std::to_string(hops));
+    // The next link of the chain reads it back from its directory (manifest and image.i128).
+    const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / ("carried-" + std::to_string(hops));
+    std::filesystem::remove_all(dir);
+    ASSERT_TRUE(r1::write_epoch(*e, dir).is_ok());
+    auto back = r1::read_epoch(dir);
+    ASSERT_TRUE(back.is_ok()) << back.status().message();
+    EXPECT_TRUE(back->spectrum.image == e->spectrum.image);
+    EXPECT_TRUE(back->spectrum.sums == e->spectrum.sums);
+    EXPECT_EQ(back->spectrum.sums_shift, e->spectrum.sums_shift);
+    prev = std::move(*back);
+    s = std::move(next);
+  }
 }
 
 TEST(Incremental, CertifiedUpdateBoundsTheExactEigenvectorsAndFreezesTheRest) {

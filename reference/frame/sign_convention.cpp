@@ -2,6 +2,7 @@
 // made positive (R1-FRM-001..002).
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "r1/reference/frame.hpp"
 
@@ -47,6 +48,10 @@ std::array<bool, 5> convention(Spectrum<Scalar>& s) {
     // Unit-norm entries lie in [-1, 1]; negation is exact. The raw -2^63 (value -2^31) cannot
     // occur in a unit vector, and negated() maps it to itself rather than overflowing.
     for (auto& x : u) x = negated(x);
+    // The image numerators of L~ u (R1-INC-038) negate with it, exactly; the sums stay.
+    if constexpr (std::is_same_v<Scalar, Q32>)
+      if (s.image.size() == 5 * u.size())
+        for (std::size_t i = 0; i < u.size(); ++i) s.image[i * 5 + k] = -s.image[i * 5 + k];
     flipped[k] = true;
   }
   return flipped;

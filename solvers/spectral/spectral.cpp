@@ -184,6 +184,9 @@ Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, con
     ops.scale(p, 0, output_units(static_cast<Scalar*>(nullptr), ops.frac_bits()) / length);
     out.u[c] = p.copy_column(0);
   }
+  // The sums an incremental epoch carries (R1-INC-038): one more block application, the
+  // certificate's rather than the solve's, so spectral_work does not count it.
+  if constexpr (std::is_same_v<Scalar, fx::Q32>) residual_sums(op, out, options.parallel);
   return out;
 }
 

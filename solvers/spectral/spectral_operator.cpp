@@ -48,9 +48,6 @@ Result<fx::Q32> spectral_rho(const Graph& g, const SpectralParams& params) {
 
 namespace {
 
-// 2^e >= n with e minimal (R1-SPEC-011): the scale of the inner product.
-int scale_exponent(std::uint32_t n) { return n <= 1 ? 0 : static_cast<int>(std::bit_width(n - 1)); }
-
 // D_i = degree_i + rho as an exact integer of Q32 units (< 2^62 + 2^63 by check_graph and the
 // Q32 range of rho).
 u128 regularised_degree(const Graph& g, std::uint32_t i, fx::Q32 rho) {
@@ -71,6 +68,14 @@ Status check_graph(const Graph& g) {
 }  // namespace
 
 namespace spectral {
+
+fx::Q32 m_entry(std::int64_t w, u128 di, u128 dj) {
+  const u128 w2 = static_cast<u128>(w) * static_cast<u128>(w);
+  const U256 num{w2 << 64, w2 >> 64};
+  return fx::Q32::from_raw(static_cast<std::int64_t>(rne_sqrt_ratio(num, di * dj)));
+}
+
+int scale_exponent(std::uint32_t n) { return n <= 1 ? 0 : static_cast<int>(std::bit_width(n - 1)); }
 
 std::vector<fx::Q32> scaled_trivial(const Graph& g, fx::Q32 rho, int e, int frac) {
   if (2 * frac + e > 120) throw std::invalid_argument("scaled_trivial: 2 frac + e above 120");
@@ -93,7 +98,7 @@ Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const Sp
   SpectralOperator<fx::Q32> op;
   op.graph = &g;
   op.n = g.n;
-  op.e = scale_exponent(g.n);
+  op.e = spectral::scale_exponent(g.n);
   op.rho = rho;
   const std::size_t n = g.n;
   std::vector<u128> d(n);
@@ -102,11 +107,7 @@ Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const Sp
   // so 2^64 w^2 <= 2^128; D_i D_j < 2^128 because each D < 2^64 for any graph r1 can hold.
   op.m.resize(g.col.size());
   for (std::uint32_t i = 0; i < g.n; ++i)
-    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
-      const u128 w2 = static_cast<u128>(g.w[k]) * static_cast<u128>(g.w[k]);
-      const U256 num{w2 << 64, w2 >> 64};
-      op.m[k] = fx::Q32::from_raw(static_cast<std::int64_t>(spectral::rne_sqrt_ratio(num, d[i] * d[g.col[k]])));
-    }
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) op.m[k] = spectral::m_entry(g.w[k], d[i], d[g.col[k]]);
   if (rho.raw > 0) {
     // g_i = RNE(2^32 sqrt(rho / (n D_i))) = RNE(sqrt(2^64 rho_raw / (n D_i))) (R1-SPEC-004).
     op.g.resize(n);
@@ -126,7 +127,7 @@ Result<SpectralOperator<double>> spectral_operator_f64(const Graph& g, const Spe
   SpectralOperator<double> op;
   op.graph = &g;
   op.n = g.n;
-  op.e = scale_exponent(g.n);
+  op.e = spectral::scale_exponent(g.n);
   op.rho = rho;
   const std::size_t n = g.n;
   // D_i as the correctly rounded double of the exact integer times 2^-32; sum D likewise.

@@ -26,6 +26,9 @@ std::string q32_triples(std::span<const std::array<fx::Q32, 3>> v);
 std::string u64_column(std::span<const std::uint64_t> v);
 std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n);
 // IEEE binary64 per entry, bit for bit (betweenness.f64).
+// Signed 128-bit integers, 16 bytes each, low 64 bits first (Spectrum::image, R1-EPO-011).
+std::string i128_column(std::span<const i128> v);
+std::vector<i128> read_i128_column(std::string_view b, std::size_t n);
 std::string f64_column(std::span<const double> v);
 std::vector<double> read_f64_column(std::string_view b, std::size_t n);
 // Row-major u32: row i holds columns[0][i], columns[1][i], ... (clusters.u32: one per level).

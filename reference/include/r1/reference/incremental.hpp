@@ -34,6 +34,7 @@ struct EditBatch {
   std::vector<std::int64_t> prev_of;       // per next particle: its index in the earlier epoch, or -1 (new)
   std::vector<std::uint32_t> touched;      // next particles whose A_sym / A2 row changed, ascending
   std::uint64_t added = 0, dropped = 0;
+  std::vector<std::uint32_t> left;         // earlier particles not in next, ascending (dropped of them)
   double delta_norm = 0;                   // bound on ||L~_next - L~_prev||_2 (R1-INC-012)
   bool same_scale = true;                  // the Q32 weight normalisation is unchanged
 };

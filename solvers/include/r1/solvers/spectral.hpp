@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,40 @@ class PanelOps;
 // bits (spectral::PanelOps's constructor arguments).
 using Q32KernelFactory =
     std::function<std::unique_ptr<spectral::PanelOps<fx::Q32>>(std::size_t n, int e, bool parallel, int frac)>;
+
+namespace spectral {
+// e minimal with 2^e >= n (R1-SPEC-011): the scale of the inner product.
+int scale_exponent(std::uint32_t n);
+// The raw of M_ij = w_ij / sqrt(D_i D_j) (R1-SPEC-003), D in Q32 raws.
+fx::Q32 m_entry(std::int64_t w, u128 di, u128 dj);
+}  // namespace spectral
+
+// Some rows of L~ with rho = 0 (R1-SPEC-001..005), for the incremental update (spec/incremental.md
+// R1-INC-038): the M entries of the listed rows only, over any CSR with per-particle weighted
+// degrees, and their exact products, bit for bit the rows SpectralOperator<Q32>::apply_block
+// computes before its rounding.
+struct RowOperatorQ32 {
+  std::vector<std::uint32_t> rows;  // the rows, in the caller's order
+  std::vector<std::uint64_t> ptr;   // rows.size() + 1 offsets into col and m
+  std::vector<std::uint32_t> col;
+  std::vector<fx::Q32> m;
+
+  static RowOperatorQ32 build(std::span<const std::uint64_t> row_ptr, std::span<const std::uint32_t> col,
+                              std::span<const std::int64_t> w, std::span<const std::uint64_t> degree,
+                              std::span<const std::uint32_t> rows, bool parallel = false);
+  // Writes image[rows[a] * 5 + c] = x_i 2^32 - sum_k M_ik x_k for row i = rows[a], x_j =
+  // cols[c][j].raw * 2^shift (five columns, each indexed by particle).
+  void numerators(std::span<const std::vector<fx::Q32>> cols, int shift, std::vector<i128>& image, bool parallel = false) const;
+};
+
+namespace spectral {
+using ResidualSums = std::array<std::array<fx::ExactSum, 3>, 5>;
+// y_i = RNE(numerator / 2^32) (R1-SPEC-005's one rounding).
+std::int64_t image_raw(i128 numerator);
+// Adds sign * (x_i^2, x_i y_i, y_i^2) of particle i, five columns, into sums (Spectrum::sums).
+void add_row_sums(std::span<const std::vector<fx::Q32>> cols, int shift, std::uint32_t i, const i128* numerators, int sign,
+                  ResidualSums& sums);
+}  // namespace spectral
 
 // How the solver runs, never what it computes: every setting gives the same bytes.
 struct SpectralOptions {
@@ -65,6 +100,15 @@ Result<fx::Q32> spectral_rho(const Graph& g, const SpectralParams& params);
 
 Result<SpectralOperator<fx::Q32>> spectral_operator_q32(const Graph& g, const SpectralParams& params);
 Result<SpectralOperator<double>> spectral_operator_f64(const Graph& g, const SpectralParams& params);
+
+// Spectrum::image and ::sums (R1-INC-038) of the spectrum's five stored vectors, scaled by
+// 2^(e / 2); left empty (sums_shift -1) when it holds fewer than five vectors or op.rho > 0.
+void residual_sums(const SpectralOperator<fx::Q32>& op, Spectrum<fx::Q32>& s, bool parallel = false);
+namespace spectral {
+// Spectrum::image and ::sums of any five vectors over every particle (one pass over op).
+void image_and_sums(const SpectralOperator<fx::Q32>& op, std::span<const std::vector<fx::Q32>> cols, int shift,
+                    std::vector<i128>& image, ResidualSums& sums, bool parallel = false);
+}  // namespace spectral
 
 // The embedding: eigenvalues, residuals and unit vectors u_2..u_6 (R1-SPEC-060..064).
 // Input errors: an empty graph, bad params (basis < 12, tolerance not positive), rho = 0 with an

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "r1/fixedpoint/exact_sum.hpp"
 #include "r1/fixedpoint/hemera.hpp"
 #include "r1/fixedpoint/q32.hpp"
 
@@ -63,6 +64,14 @@ struct Spectrum {
   // Work done, for the manifest: restarts, vectors L~ was applied to, and block applications
   // (passes over the operator, each for a block of up to 7 vectors) (R1-SPEC-063).
   std::uint32_t restarts = 0, matvecs = 0, passes = 0;
+  // What an incremental epoch carries instead of passing over every particle (spec/incremental.md
+  // R1-INC-038; Q32 only). For each stored vector c, x = u_c's raws times 2^sums_shift:
+  // image[i * 5 + c] = the exact numerator x_i 2^32 - sum_k M_ik x_k of row i of L~ x (R1-SPEC-005
+  // before its one rounding, y_i = RNE(numerator / 2^32)), and sums[c] = {sum x_i^2, sum x_i y_i,
+  // sum y_i^2} in raws squared. sums_shift < 0: none (fp64, fewer than 5 vectors, rho > 0).
+  int sums_shift = -1;
+  std::array<std::array<fx::ExactSum, 3>, 5> sums{};
+  std::vector<i128> image;
 };
 
 // ---- frame (R-1.0 4, decision 7) ---------------------------------------------------------------
