@@ -38,7 +38,7 @@ class NullBackend final : public Backend {
     return f;
   }
   Result<Focus<Q32>> focus_update(const Graph& g, const EpochOptions& o, double l2, std::span<const Q32>,
-                                  std::span<const std::uint32_t>, const ProgressFn& p) override {
+                                  std::span<const Q32>, std::span<const std::uint32_t>, const ProgressFn& p) override {
     return focus(g, o, l2, p);  // the same uniform focus: no graph information either way
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>&, const Anchor*, const std::string&) override {

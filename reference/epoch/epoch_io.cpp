@@ -184,6 +184,11 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
     f.emplace_back("titles.tsv", std::move(t));
   }
   f.emplace_back("focus.q32", q32_column(e.focus.phi));
+  if (!e.focus.heat.empty()) {
+    if (e.focus.heat.size() != n)
+      return Status::internal("epoch: " + std::to_string(e.focus.heat.size()) + " heat values for " + std::to_string(n) + " particles");
+    f.emplace_back("heat.q32", q32_column(e.focus.heat));  // R1-INC-052: what the next epoch's focus update starts from
+  }
   f.emplace_back("spectral.q32", format::q32_rows(e.spectrum.u, n));
   f.emplace_back("positions.q32", format::q32_triples(e.frame.position));
   f.emplace_back("radius.q32", q32_column(e.encoding.radius));
@@ -445,6 +450,14 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   for (std::size_t i = 0; i < n; ++i) std::memcpy(e.ids[i].data(), ids.data() + i * 32, 32);
   R1_ASSIGN(const std::string_view focus, files.rows("focus.q32", 8));
   e.focus.phi = read_q32_column(focus, n);
+  if (files.find("heat.q32")) {
+    R1_ASSIGN(const std::string_view heat, files.rows("heat.q32", 8));
+    e.focus.heat = read_q32_column(heat, n);
+    // The heat of a distribution stays near [0, 1]: beyond 2 it was not written by r1.
+    for (std::size_t i = 0; i < n; ++i)
+      if (e.focus.heat[i].raw > (std::int64_t{2} << 32) || e.focus.heat[i].raw < -(std::int64_t{2} << 32))
+        return Status::input((dir / "heat.q32").string() + ": byte " + std::to_string(8 * i) + ": a heat value beyond 2");
+  }
   R1_ASSIGN(const std::string_view spectral, files.rows("spectral.q32", 40));
   for (std::size_t k = 0; k < 5; ++k) e.spectrum.u[k] = read_q32_column(spectral, n, 5, k);
   R1_ASSIGN(const std::string_view pos, files.rows("positions.q32", 24));

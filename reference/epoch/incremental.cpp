@@ -711,10 +711,17 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   {
     // phi on N_h from PREV's, every other particle frozen (R1-INC-050); the full iteration when
     // the frozen particles leave the region less than one raw each.
-    std::vector<Q32> start(n);
+    std::vector<Q32> start(n), start_heat;
     for (std::size_t i = 0; i < n; ++i)
       if (batch.prev_of[i] >= 0) start[i] = prev.focus.phi[static_cast<std::size_t>(batch.prev_of[i])];
-    auto local = stages.focus_update(g, options, lambda2, start, nh, progress);
+    // The carried heat term (R1-INC-052), an added particle 0; without it (PREV's lambda_h was 0,
+    // which the parameter check makes NEXT's too) none is needed.
+    if (!prev.focus.heat.empty()) {
+      start_heat.resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        if (batch.prev_of[i] >= 0) start_heat[i] = prev.focus.heat[static_cast<std::size_t>(batch.prev_of[i])];
+    }
+    auto local = stages.focus_update(g, options, lambda2, start, start_heat, nh, progress);
     if (local.is_ok()) {
       e.focus = std::move(*local);
       info.focus_local = true;

@@ -196,17 +196,36 @@ Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& p, d
     R1_ASSIGN(const auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
     std::vector<Q32> phi = project_to_simplex_q32(ops.prior());  // R1-FOC-012
     run_steps_q32(ops, p, plan.steps, g.n, std::uint64_t{1} << 32, options.parallel, phi, progress);
-    return finish_q32(std::move(phi), plan, options.parallel);
+    // The heat term of the result, which the next incremental epoch starts from (R1-INC-052).
+    std::vector<Q32> heat;
+    if (p.lambda_h.raw != 0) focus::heat_q32(ops, heat_coefficients(p.tau, p.chebyshev_degree), phi, heat);
+    Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel);
+    f.heat = std::move(heat);
+    return f;
+  });
+}
+
+Result<std::vector<Q32>> heat_term_q32(const Graph& g, const TriKernelParams& p, std::span<const Q32> x, const FocusOptions& options) {
+  return guarded([&]() -> Result<std::vector<Q32>> {
+    if (x.size() != g.n) return Status::input("heat term: " + std::to_string(x.size()) + " values for " + std::to_string(g.n) + " particles");
+    R1_ASSIGN(const auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
+    std::vector<Q32> heat;
+    focus::heat_q32(ops, heat_coefficients(p.tau, p.chebyshev_degree), x, heat);
+    return heat;
   });
 }
 
 Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, double lambda2, std::span<const Q32> start,
-                                    std::span<const std::uint32_t> region, const ProgressFn& progress,
-                                    const FocusOptions& options) {
+                                    std::span<const Q32> start_heat, std::span<const std::uint32_t> region,
+                                    const ProgressFn& progress, const FocusOptions& options) {
   return guarded([&]() -> Result<Focus<Q32>> {
     R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
     if (start.size() != g.n)
       return Status::input("focus update: " + std::to_string(start.size()) + " start values for " + std::to_string(g.n) + " particles");
+    const bool use_h = p.lambda_h.raw != 0;
+    if (use_h && start_heat.size() != g.n)
+      return Status::input("focus update: " + std::to_string(start_heat.size()) + " start heat values for " + std::to_string(g.n) +
+                           " particles");
     std::vector<Q32> phi(start.begin(), start.end());
     // The frozen particles keep their raws (each at least 1); the region holds the rest of 2^32
     // (R1-INC-051).
@@ -229,7 +248,9 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
       if (total != 0)
         return Status::input("focus update: no region, and the start sums to " + std::to_string(static_cast<std::uint64_t>(frozen)) +
                              " raws, not 2^32");
-      return finish_q32(std::move(phi), plan, options.parallel);
+      Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel);
+      if (use_h) f.heat.assign(start_heat.begin(), start_heat.end());
+      return f;
     }
     std::vector<std::uint32_t> global;
     R1_ASSIGN(const auto ops, focus::OperatorsQ32::build_local(g, p, options.parallel, region, phi, global));
@@ -238,29 +259,18 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
     const auto active = static_cast<std::uint32_t>(region.size());
     // The heat term (R1-INC-052): inside the region's ring the walk runs on, beyond it the start
     // holds. The ring stands in for the rest of the graph as fixed points, which the start is not,
-    // so the step uses H_exact(start) + H_local(x) - H_local(start): exact at the start (where the
-    // walk reaches K m hops: its own local operators over that reach, whose ring is too far to
-    // matter), and first order in x - start.
+    // so the step uses start_heat + H_local(x) - H_local(start): the carried heat at the start
+    // (exact when start_heat is the heat of the start on this graph) and first order in x - start.
     std::vector<std::int64_t> heat_offset;
-    if (p.lambda_h.raw != 0) {
-      const HeatCoefficients heat = heat_coefficients(p.tau, p.chebyshev_degree);
-      const std::uint32_t reach = heat.substeps * p.chebyshev_degree;
-      const std::vector<std::uint32_t> wide = within_hops(g, region, reach);
-      std::vector<std::uint32_t> wide_global;
-      // A ball that holds every particle has no ring: its operators are the graph's own, which
-      // build() makes on every core (the same entries, R1-FOC-041; on small-world graphs the
-      // usual case, since K m hops cross them).
-      R1_ASSIGN(const auto wide_ops, wide.size() == g.n ? focus::OperatorsQ32::build(g, p, options.parallel)
-                                                        : focus::OperatorsQ32::build_local(g, p, options.parallel, wide, phi, wide_global));
-      if (wide.size() == g.n) wide_global = wide;
-      std::vector<Q32> xw(wide_global.size()), hw, hl;
-      for (std::size_t a = 0; a < wide_global.size(); ++a) xw[a] = phi[wide_global[a]];
-      focus::heat_q32(wide_ops, heat, xw, hw);
+    const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
+    if (use_h) {
+      std::vector<Q32> hl;
       focus::heat_q32(ops, heat, x, hl);
       heat_offset.resize(active);
       for (std::uint32_t a = 0; a < active; ++a) {
-        const auto at = std::lower_bound(wide.begin(), wide.end(), region[a]) - wide.begin();
-        heat_offset[a] = hw[static_cast<std::size_t>(at)].raw - hl[a].raw;
+        const i128 d = i128{start_heat[global[a]].raw} - hl[a].raw;
+        if (!fx::detail::fits_i64(d)) return Status::input("focus update: start heat of particle " + std::to_string(global[a]) + " out of range");
+        heat_offset[a] = static_cast<std::int64_t>(d);
       }
     }
     // The start on R, projected onto the region's share (the identity when it already holds it).
@@ -268,7 +278,21 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
     focus::project_onto(first, total, std::span<Q32>(x).first(active));
     run_steps_q32(ops, p, plan.steps, active, total, options.parallel, x, progress, heat_offset);
     for (std::uint32_t a = 0; a < active; ++a) phi[global[a]] = x[a];
-    return finish_q32(std::move(phi), plan, options.parallel);
+    // The result's heat: the carried one, and on the region the step's term at the result.
+    std::vector<Q32> result_heat;
+    if (use_h) {
+      result_heat.assign(start_heat.begin(), start_heat.end());
+      std::vector<Q32> hl;
+      focus::heat_q32(ops, heat, x, hl);
+      for (std::uint32_t a = 0; a < active; ++a) {
+        const i128 v = i128{hl[a].raw} + heat_offset[a];
+        if (!fx::detail::fits_i64(v)) return Status::internal("focus update: the heat term leaves the Q32 range");
+        result_heat[global[a]] = Q32::from_raw(static_cast<std::int64_t>(v));
+      }
+    }
+    Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel);
+    f.heat = std::move(result_heat);
+    return f;
   });
 }
 

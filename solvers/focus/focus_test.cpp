@@ -543,7 +543,13 @@ RC_GTEST_PROP(FocusUpdate, ConservesPositiveAndFreezesOutside, ()) {
     if (*rc::gen::inRange(0, 3) == 0) region.push_back(i);
   if (region.empty()) region.push_back(g.n - 1);
   const double lambda2 = *rc::gen::inRange(0, 2001) / 1000.0;
-  const auto f = r1::update_focus_q32(g, p, lambda2, start, region);
+  std::vector<Q32> heat;
+  if (p.lambda_h.raw != 0) {
+    auto h = r1::heat_term_q32(g, p, start);
+    RC_ASSERT(h.is_ok());
+    heat = std::move(*h);
+  }
+  const auto f = r1::update_focus_q32(g, p, lambda2, start, heat, region);
   RC_ASSERT(f.is_ok());
   std::vector<char> inside(g.n, 0);
   for (const auto i : region) inside[i] = 1;

@@ -48,6 +48,13 @@ std::vector<Q32> start_of(const Graph& g, const TriKernelParams& p) {
   return r1::project_to_simplex_q32(ops->prior());  // R1-FOC-012
 }
 
+// The exact heat term of the start (what an epoch carries for its own phi, R1-INC-052).
+std::vector<Q32> heat_of(const Graph& g, const TriKernelParams& p, const std::vector<Q32>& x) {
+  auto h = r1::heat_term_q32(g, p, x);
+  EXPECT_TRUE(h.is_ok()) << h.status().message();
+  return std::move(h).value();
+}
+
 double l1(const std::vector<Q32>& a, const std::vector<Q32>& b) {
   double s = 0;
   for (std::size_t i = 0; i < a.size(); ++i) s += std::fabs(static_cast<double>(a[i].raw - b[i].raw)) * 0x1p-32;
@@ -70,20 +77,24 @@ TEST(FocusUpdate, WholeRegionIsTheFullIteration) {
     r1::FocusOptions par;
     par.parallel = true;
     const auto full = r1::compute_focus_q32(g, p, 0.25);
-    const auto local = r1::update_focus_q32(g, p, 0.25, start_of(g, p), all);
-    const auto local_par = r1::update_focus_q32(g, p, 0.25, start_of(g, p), all, {}, par);
+    const std::vector<Q32> start = start_of(g, p), heat = heat_of(g, p, start);
+    const auto local = r1::update_focus_q32(g, p, 0.25, start, heat, all);
+    const auto local_par = r1::update_focus_q32(g, p, 0.25, start, heat, all, {}, par);
     ASSERT_TRUE(full.is_ok() && local.is_ok() && local_par.is_ok()) << local.status().message();
     EXPECT_EQ(local->phi, full->phi) << "n " << g.n;
     EXPECT_EQ(local_par->phi, full->phi);
     EXPECT_EQ(local->steps, full->steps);
     EXPECT_EQ(local->syntropy, full->syntropy);
     EXPECT_EQ(local->cyberank, full->cyberank);
+    // The carried heat is the heat of the result, as a full epoch's.
+    EXPECT_EQ(local->heat, full->heat);
+    EXPECT_EQ(full->heat, heat_of(g, p, full->phi));
   }
 }
 
 // A reweighted link and an added one in a 3000-particle geometric graph: the update on the h-hop
-// region moves phi more than half the way from the earlier fixed point to the edited graph's (L1
-// distances recorded).
+// region, from the earlier epoch's phi and carried heat, moves phi toward the edited graph's fixed
+// point, more than half the way at h = 4 (L1 distances recorded).
 TEST(FocusUpdate, ApproachesTheEditedFixedPoint) {
   const r1::Snapshot s = generated(r1::GenKind::kRgg, 3000, 3);
   const Graph g0 = graph_of(s);
@@ -112,16 +123,22 @@ TEST(FocusUpdate, ApproachesTheEditedFixedPoint) {
   const double moved = l1(before->phi, after->phi);
   for (const std::uint32_t h : {1u, 2u, 4u}) {
     const auto region = r1::neighbourhood(g1, touched, h);
-    const auto local = r1::update_focus_q32(g1, p, 0.01, before->phi, region);
+    // The heat the earlier epoch carries: its own phi's on its own graph.
+    const auto local = r1::update_focus_q32(g1, p, 0.01, before->phi, before->heat, region);
     ASSERT_TRUE(local.is_ok()) << local.status().message();
     const double left = l1(local->phi, after->phi);
     RecordProperty("l1_left_h" + std::to_string(h), sci(left) + " of " + sci(moved) + ", region " + std::to_string(region.size()));
-    // Measured: 38% (h = 1), 33% (h = 2), 25% (h = 4) of the distance is left: mass that the new
-    // link draws from the frozen particles, which keep their bits by R1-INC-050.
-    EXPECT_LT(left, 0.45 * moved) << "h " << h;
+    // Measured: 53% (h = 1), 48% (h = 2), 41% (h = 4) of the distance is left: mass that the new
+    // link draws from the frozen particles, which keep their bits by R1-INC-050, and the edit's
+    // direct effect on the heat term at the start, which the carried heat does not see
+    // (R1-INC-052; with the exact heat of the start over its whole reach: 38%, 33%, 25%).
+    EXPECT_LT(left, 0.6 * moved) << "h " << h;
+    if (h == 4) {
+      EXPECT_LT(left, 0.45 * moved);
+    }
     r1::FocusOptions par;
     par.parallel = true;
-    const auto again = r1::update_focus_q32(g1, p, 0.01, before->phi, region, {}, par);
+    const auto again = r1::update_focus_q32(g1, p, 0.01, before->phi, before->heat, region, {}, par);
     ASSERT_TRUE(again.is_ok());
     EXPECT_EQ(again->phi, local->phi);
   }
@@ -130,29 +147,33 @@ TEST(FocusUpdate, ApproachesTheEditedFixedPoint) {
 TEST(FocusUpdate, BadInputIsAnInputError) {
   const Graph g = graph_of(generated(r1::GenKind::kRing, 12, 1));
   TriKernelParams p;
-  const std::vector<Q32> start = start_of(g, p);
-  const auto bad_order = r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{3, 2});
+  const std::vector<Q32> start = start_of(g, p), heat = heat_of(g, p, start);
+  const auto bad_order = r1::update_focus_q32(g, p, 0.1, start, heat, std::vector<std::uint32_t>{3, 2});
   ASSERT_FALSE(bad_order.is_ok());
   EXPECT_NE(bad_order.status().message().find("out of order"), std::string::npos);
   // No region (an empty batch): the start, bit for bit, when it is a focus; else an input error.
-  const auto none = r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{});
+  const auto none = r1::update_focus_q32(g, p, 0.1, start, heat, std::vector<std::uint32_t>{});
   ASSERT_TRUE(none.is_ok()) << none.status().message();
   EXPECT_EQ(none->phi, start);
   std::vector<Q32> short_start = start;
   short_start[0] = Q32::from_raw(short_start[0].raw - 1);
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, short_start, std::vector<std::uint32_t>{}).is_ok());
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start, std::vector<std::uint32_t>{12}).is_ok());
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, std::vector<Q32>(11, Q32::from_raw(1)), std::vector<std::uint32_t>{0}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, short_start, heat, std::vector<std::uint32_t>{}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start, heat, std::vector<std::uint32_t>{12}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, std::vector<Q32>(11, Q32::from_raw(1)), heat, std::vector<std::uint32_t>{0}).is_ok());
   // Frozen particles that hold all 2^32 raws leave nothing for the region.
   std::vector<Q32> greedy(g.n, Q32::from_raw(1));
   greedy[0] = Q32::from_raw(ONE - static_cast<std::int64_t>(g.n) + 2);
-  const auto starved = r1::update_focus_q32(g, p, 0.1, greedy, std::vector<std::uint32_t>{5, 6});
+  const auto starved = r1::update_focus_q32(g, p, 0.1, greedy, heat, std::vector<std::uint32_t>{5, 6});
   ASSERT_FALSE(starved.is_ok());
   EXPECT_NE(starved.status().message().find("fewer than one"), std::string::npos);
+  // The heat must come with every particle.
+  const auto no_heat = r1::update_focus_q32(g, p, 0.1, start, std::vector<Q32>(3), std::vector<std::uint32_t>{5});
+  ASSERT_FALSE(no_heat.is_ok());
+  EXPECT_NE(no_heat.status().message().find("3 start heat values for 12 particles"), std::string::npos) << no_heat.status().message();
   // A frozen raw below 1 is not a focus.
   std::vector<Q32> zero = start;
   zero[1] = Q32::from_raw(0);
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, zero, std::vector<std::uint32_t>{5}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, zero, heat, std::vector<std::uint32_t>{5}).is_ok());
 }
 
 }  // namespace

@@ -34,9 +34,17 @@ Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& para
 // region every particle and `start` the projected prior it is compute_focus_q32's result; with no
 // region it is `start`. Input error when the frozen raws leave fewer than one raw per region
 // particle (with no region: when they do not sum to exactly 2^32).
+// The heat term on the region is `start_heat + H_local(x) - H_local(start)` (R1-INC-052, one entry
+// per particle; unused when lambda_h = 0): with start_heat the exact heat of `start` and the
+// region every particle, the update is compute_focus_q32's. The result's heat is start_heat
+// outside the region and that term at the result inside.
 Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
-                                    std::span<const Q32> start, std::span<const std::uint32_t> region,
-                                    const ProgressFn& progress = {}, const FocusOptions& options = {});
+                                    std::span<const Q32> start, std::span<const Q32> start_heat,
+                                    std::span<const std::uint32_t> region, const ProgressFn& progress = {},
+                                    const FocusOptions& options = {});
+// The heat term H(x) of R1-FOC-043 over the whole graph (what Focus::heat holds).
+Result<std::vector<Q32>> heat_term_q32(const Graph& g, const TriKernelParams& params, std::span<const Q32> x,
+                                       const FocusOptions& options = {});
 // The particles within h hops of `seeds` in A_sym (breadth first), ascending (R1-INC-021).
 std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint32_t> seeds, std::uint32_t h);
 // The same algorithm in IEEE doubles with pairwise reductions (R1-FOC-080..083).

@@ -42,6 +42,10 @@ struct Focus {
   double lambda_max = 0;          // bound 2 max d on the largest eigenvalue of L = D - A_sym (Gershgorin, R1-FOC-060)
   double syntropy = 0;            // KL(phi || uniform), nats
   std::vector<std::uint32_t> cyberank;  // particle indices by phi descending, ties by lower index
+  // The heat term H(phi) of the result (R1-FOC-043 applied to phi; Q32 with lambda_h > 0, else
+  // empty): what the next incremental epoch's local update starts from (spec/incremental.md
+  // R1-INC-052).
+  std::vector<Scalar> heat;
 };
 
 // ---- spectral embedding (R-1.0 3) ------------------------------------------------------------

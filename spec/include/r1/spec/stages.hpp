@@ -41,10 +41,11 @@ class EpochStages {
                                    const ProgressFn& progress) = 0;
   // The local focus update of an incremental epoch (spec/incremental.md R1-INC-050..053): the same
   // steps on `region` (ascending) only, every other particle frozen at `start` (one Q32 per
-  // particle: the earlier epoch's phi, 0 for an added particle). Q32 domain only.
+  // particle: the earlier epoch's phi, 0 for an added particle), the heat term from `start_heat`
+  // (the earlier epoch's carried heat, likewise). Q32 domain only.
   virtual Result<Focus<Q32>> focus_update(const Graph& graph, const EpochOptions& options, double lambda2,
-                                          std::span<const Q32> start, std::span<const std::uint32_t> region,
-                                          const ProgressFn& progress) = 0;
+                                          std::span<const Q32> start, std::span<const Q32> start_heat,
+                                          std::span<const std::uint32_t> region, const ProgressFn& progress) = 0;
   // Genesis frame, then the alignment to `anchor` when set; `anchor_name` names it in messages.
   virtual Result<Frame> frame(const Snapshot& snapshot, const Spectrum<Q32>& conventioned, const Anchor* anchor,
                               const std::string& anchor_name) = 0;
