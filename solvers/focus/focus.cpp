@@ -59,6 +59,21 @@ std::vector<std::uint32_t> rank_by(const std::vector<Key>& key) {
   return order;
 }
 
+// The same order for Q32 phi (raws 1..2^32, as every focus holds): one 64-bit key per particle,
+// (2^32 - raw) above the index, sorted ascending, so no comparison reads phi again.
+std::vector<std::uint32_t> rank_by(const std::vector<Q32>& phi) {
+  constexpr std::int64_t kTop = std::int64_t{1} << 32;
+  std::vector<std::uint64_t> keys(phi.size());
+  for (std::size_t i = 0; i < phi.size(); ++i) {
+    if (phi[i].raw < 1 || phi[i].raw > kTop) return rank_by<Q32>(phi);
+    keys[i] = (static_cast<std::uint64_t>(kTop - phi[i].raw) << 32) | i;
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::uint32_t> order(phi.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
+  return order;
+}
+
 // Runs a stage body and turns the exceptions a numeric path can raise into Status values
 // (R1-FOC-003, R1-ERR-004).
 template <class F>

@@ -518,6 +518,17 @@ RC_GTEST_PROP(FocusIteration, ConservationAndPositivity, ()) {
   RC_ASSERT(sum == ONE);
   RC_ASSERT(q->steps >= 1u && q->steps <= p.max_steps);
   RC_ASSERT(q->cyberank.size() == g.n);
+  // cyberank: every particle once, phi descending, ties by the lower index (R1-FOC-070).
+  std::vector<char> seen(g.n, 0);
+  for (std::size_t k = 0; k < q->cyberank.size(); ++k) {
+    const auto b = q->cyberank[k];
+    RC_ASSERT(b < g.n && !seen[b]);
+    seen[b] = 1;
+    if (k > 0) {
+      const auto a = q->cyberank[k - 1];
+      RC_ASSERT(q->phi[a] > q->phi[b] || (q->phi[a] == q->phi[b] && a < b));
+    }
+  }
   const auto f = r1::compute_focus_f64(g, p, lambda2);
   RC_ASSERT(f.is_ok());
   RC_ASSERT(f->steps == q->steps);
