@@ -516,8 +516,9 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   // ---- the local update of u_2..u_6 (R1-INC-031) ----
   auto clock = std::chrono::steady_clock::now();
   const double batch_s = std::chrono::duration<double>(clock - batch_start).count();
-  // The passes over every particle (the operator, and its exact block products before and after
-  // the update) are timed apart from the local work: `certificate` against `spectral`.
+  // The certificate's bookkeeping (the carried sums, the rows of N_(h+1) after the update; a pass
+  // over every particle only without carried sums) is timed apart from the local work:
+  // `certificate` against `spectral`; gathering PREV's arrays by particle is `carry`.
   const auto since = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
