@@ -191,10 +191,14 @@ TEST(FocusApportion, HandExamples) {
 RC_GTEST_PROP(FocusApportion, LargestRemainderAgainstRationals, ()) {
   using boost::multiprecision::cpp_int;
   const auto n = *rc::gen::inRange<std::size_t>(1, 40);
-  const auto total = *rc::gen::inRange<std::uint64_t>(0, std::uint64_t{1} << 40);
-  const auto big = *rc::gen::arbitrary<bool>();
+  // Totals up to 2^63 and weights from tiny to 2^64 (sums below and above 2^64).
+  const auto total = *rc::gen::arbitrary<bool>() ? *rc::gen::inRange<std::uint64_t>(0, std::uint64_t{1} << 40)
+                                                 : *rc::gen::arbitrary<std::uint64_t>() >> 1;
+  const auto big = *rc::gen::inRange(0, 3);
   std::vector<std::uint64_t> w(n);
-  for (auto& x : w) x = big ? *rc::gen::arbitrary<std::uint64_t>() : *rc::gen::inRange<std::uint64_t>(0, 4);
+  for (auto& x : w)
+    x = big == 0 ? *rc::gen::inRange<std::uint64_t>(0, 4)
+                 : big == 1 ? *rc::gen::arbitrary<std::uint64_t>() >> 8 : *rc::gen::arbitrary<std::uint64_t>();
   const auto out = r1::apportion(total, w);
   cpp_int sum_w = 0;
   for (const auto x : w) sum_w += x;
