@@ -495,6 +495,12 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
     if (!files.find("image.i128")) return Status::input(manifest + ": residual_sums without image.i128");
     R1_ASSIGN(const std::string_view img, files.rows("image.i128", 80));
     e.spectrum.image = format::read_i128_column(img, n * 5);
+    // r1's numerators stay below 2^83 (entries below 2^50 and an image of norm at most twice
+    // theirs): beyond 2^94 the rounded image would leave int64 (R1-INC-038).
+    const i128 limit = i128{1} << 94;
+    for (std::size_t k = 0; k < e.spectrum.image.size(); ++k)
+      if (e.spectrum.image[k] >= limit || e.spectrum.image[k] <= -limit)
+        return Status::input((dir / "image.i128").string() + ": byte " + std::to_string(16 * k) + ": a numerator beyond 2^94");
   }
   if (files.find("betweenness.f64")) {
     R1_ASSIGN(const std::string_view b, files.rows("betweenness.f64", 8));

@@ -46,7 +46,8 @@ r1::Epoch synthetic(std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) e.encoding.betweenness.push_back(0.1 * static_cast<double>(i) + 1.0 / 3.0);
   // The carried image and sums (R1-INC-038): negative numerators and every limb in use.
   e.spectrum.sums_shift = 2;
-  for (std::size_t i = 0; i < 5 * n; ++i) e.spectrum.image.push_back((r1::i128{1} << 100) / static_cast<r1::i128>(i + 1) - static_cast<r1::i128>(3 * i));
+  for (std::size_t i = 0; i < 5 * n; ++i)
+    e.spectrum.image.push_back((i % 2 ? -1 : 1) * ((r1::i128{1} << 90) / static_cast<r1::i128>(i + 1)) - static_cast<r1::i128>(3 * i));
   for (std::size_t c = 0; c < 5; ++c) {
     e.spectrum.sums[c][0].add_term(r1::i128{1} << 120);
     e.spectrum.sums[c][0].add_term(r1::i128{1} << 120);
@@ -158,6 +159,13 @@ TEST(EpochIo, ConsistentDigestsDoNotHideBadEdgesOrHierarchy) {
   auto r = r1::read_epoch(d / "a");
   ASSERT_FALSE(r.is_ok());
   EXPECT_NE(r.status().message().find("edges.bin: byte 24: layout edge out of order"), std::string::npos) << r.status().message();
+
+  e = synthetic(8);
+  e.spectrum.image[7] = r1::i128{1} << 100;  // no image r1 computes reaches 2^94
+  ASSERT_TRUE(r1::write_epoch(e, d / "c").is_ok());
+  r = r1::read_epoch(d / "c");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("image.i128: byte 112: a numerator beyond 2^94"), std::string::npos) << r.status().message();
 
   e = synthetic(8);
   e.hierarchy.levels[0][0].hi[0] = Q32::from_int(-100);  // a box that no longer holds its particles

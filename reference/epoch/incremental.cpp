@@ -233,8 +233,8 @@ Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Grap
 namespace {
 
 // The local least-squares correction of one vector (R1-INC-031), in fp64 over the rows of
-// N_(h+1) (compact indices), the correction supported on N_h.
-// M on the rows of N_(h+1) (compact, ascending) restricted to the columns of N_h.
+// N_(h+1) (compact indices), the correction supported on N_h: M on those rows (ascending)
+// restricted to the columns of N_h.
 struct Local {
   std::vector<char> inner;         // per compact row: in N_h
   std::vector<std::uint64_t> ptr;  // per compact row, its entries in N_h's columns, ascending
