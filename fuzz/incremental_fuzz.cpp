@@ -16,6 +16,7 @@
 #include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/incremental.hpp"
+#include "r1/solvers/spectral.hpp"
 
 namespace {
 
@@ -116,6 +117,16 @@ R1_FUZZ_TARGET(incremental) {
         if (!inside[i] && batch_now->prev_of[i] >= 0 &&
             inc->focus.phi[i] != prev.focus.phi[static_cast<std::size_t>(batch_now->prev_of[i])])
           finding("a frozen particle's focus moved");
+    }
+    // The carried image and sums are a pass over the whole graph, bit for bit (R1-INC-038).
+    if (inc->update->incremental && inc->spectrum.sums_shift >= 0) {
+      auto op = r1::spectral_operator_q32(*g, options.spectral);
+      if (!op.is_ok()) finding("the operator failed where the update succeeded");
+      std::vector<r1::i128> image;
+      r1::spectral::ResidualSums sums;
+      r1::spectral::image_and_sums(*op, inc->spectrum.u, op->e / 2, image, sums);
+      if (inc->spectrum.sums_shift != op->e / 2 || image != inc->spectrum.image || sums != inc->spectrum.sums)
+        finding("the carried image or sums differ from a pass over the whole graph");
     }
     // Every conformant backend gives the same epoch.
     for (const auto& info : r1::backends::registered_backends()) {
