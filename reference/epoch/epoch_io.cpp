@@ -28,7 +28,7 @@ namespace {
 
 constexpr const char* kFormat = "r1-epoch";
 constexpr int kVersion = 4;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64;
-                             // 4: residual_sums
+                             // 4: image.i128 with residual_sums, heat.q32
 
 using format::kEdgeBytes;
 using format::q32_column;

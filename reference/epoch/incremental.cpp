@@ -558,25 +558,25 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   const std::vector<std::uint32_t> full_rows = info.hops >= 1 ? nh : neighbourhood(g, batch.touched, 1);
   const RowOperatorQ32 next_op = RowOperatorQ32::build(g.row_ptr, g.col, g.w, g.degree, full_rows, options.parallel);
 
-  // The exact sums before the update: the earlier epoch's with the particles that left and the rows
-  // of F taken out and F's rows under the next operator put in; without carried sums at this
-  // scale, one exact pass over every particle.
+  // The exact sums without the rows of N_(h+1) (base): the earlier epoch's with the particles
+  // that left and its own terms of those rows taken out; without carried sums at this scale, one
+  // exact pass over every particle. Then F's rows under the next operator, and the sums of PREV's
+  // vectors under L~_next: base plus the terms of N_(h+1) (the rows outside F are PREV's).
   auto t_global = std::chrono::steady_clock::now();
-  Sums sums{};
+  Sums base{};
   if (sums_carried) {
-    sums = prev.spectrum.sums;
-    for (const std::uint32_t p : batch.left) spectral::add_row_sums(prev.spectrum.u, shift, p, &prev.spectrum.image[std::size_t{p} * 5], -1, sums);
-    for (const std::uint32_t i : full_rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, sums);
+    base = prev.spectrum.sums;
+    for (const std::uint32_t p : batch.left) spectral::add_row_sums(prev.spectrum.u, shift, p, &prev.spectrum.image[std::size_t{p} * 5], -1, base);
+    for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, base);
     next_op.numerators(out, shift, image, options.parallel);
-    for (const std::uint32_t i : full_rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], 1, sums);
   } else {
     R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
-    spectral::image_and_sums(op, out, shift, image, sums, options.parallel);
+    spectral::image_and_sums(op, out, shift, image, base, options.parallel);
+    for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, base);
   }
+  Sums sums = base;
+  for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], 1, sums);
   const Residuals before_update = residuals_of(sums, n, shift);
-  // Without the rows of N_(h+1): the update's terms go back in after it.
-  Sums base = sums;
-  for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, base);
   global_s += since(t_global);
 
   // M restricted to the columns of N_h, by compact row (ascending columns, as the rows are stored):
