@@ -299,4 +299,57 @@ TEST(Spectral, OperatorApplicationIsExactOnBothPaths) {
   }
 }
 
+// The carried image of R1-INC-038 against two things it does not share code with: the rounded
+// rows of SpectralOperator::apply_block (the solver's own product) and the three sums recomputed
+// with big integers from those rows; RowOperatorQ32 on a subset of rows against the same.
+TEST(SpectralImage, NumeratorsRoundToTheOperatorsRowsAndSumExactly) {
+  using boost::multiprecision::cpp_int;
+  for (const auto kind : {r1::GenKind::kBa, r1::GenKind::kRing}) {
+    const r1::Graph g = generated(kind, 700);
+    auto op = r1::spectral_operator_q32(g, r1::SpectralParams{});
+    ASSERT_TRUE(op.is_ok());
+    const int shift = op->e / 2;
+    // Unit-size random vectors, raws up to 2^32 either way.
+    std::array<std::vector<r1::Q32>, 5> u;
+    for (std::size_t c = 0; c < 5; ++c)
+      for (std::uint32_t i = 0; i < g.n; ++i)
+        u[c].push_back(r1::Q32::from_raw(static_cast<std::int64_t>(r1::rng::bits(7, i, c) >> 31) - (std::int64_t{1} << 32)));
+    std::vector<r1::i128> image;
+    r1::spectral::ResidualSums sums;
+    r1::spectral::image_and_sums(*op, u, shift, image, sums);
+    std::vector<r1::Q32> x(std::size_t{g.n} * 5), y(std::size_t{g.n} * 5);
+    for (std::uint32_t i = 0; i < g.n; ++i)
+      for (std::size_t c = 0; c < 5; ++c) x[std::size_t{i} * 5 + c] = r1::Q32::from_raw(u[c][i].raw << shift);
+    op->apply_block(x.data(), 5, y.data(), 5, 5);
+    for (std::size_t c = 0; c < 5; ++c) {
+      cpp_int xx = 0, xy = 0, yy = 0;
+      for (std::uint32_t i = 0; i < g.n; ++i) {
+        const std::size_t k = std::size_t{i} * 5 + c;
+        ASSERT_EQ(r1::spectral::image_raw(image[k]), y[k].raw) << "row " << i;
+        const cpp_int a(x[k].raw), b(y[k].raw);
+        xx += a * a;
+        xy += a * b;
+        yy += b * b;
+      }
+      const auto as_int = [](const r1::fx::ExactSum& e) {
+        const auto l = e.limbs();
+        cpp_int v = (cpp_int(l[2]) << 128) | (cpp_int(l[1]) << 64) | cpp_int(l[0]);
+        if ((l[2] >> 63) != 0) v -= cpp_int(1) << 192;
+        return v;
+      };
+      EXPECT_EQ(as_int(sums[c][0]), xx);
+      EXPECT_EQ(as_int(sums[c][1]), xy);
+      EXPECT_EQ(as_int(sums[c][2]), yy);
+    }
+    // Every third row through RowOperatorQ32, from the graph's arrays: the same numerators.
+    std::vector<std::uint32_t> rows;
+    for (std::uint32_t i = 0; i < g.n; i += 3) rows.push_back(i);
+    const auto part = r1::RowOperatorQ32::build(g.row_ptr, g.col, g.w, g.degree, rows);
+    std::vector<r1::i128> again(image.size(), 0);
+    part.numerators(u, shift, again);
+    for (const std::uint32_t i : rows)
+      for (std::size_t c = 0; c < 5; ++c) ASSERT_TRUE(again[std::size_t{i} * 5 + c] == image[std::size_t{i} * 5 + c]) << "row " << i;
+  }
+}
+
 }  // namespace
