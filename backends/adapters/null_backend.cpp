@@ -34,11 +34,11 @@ class NullBackend final : public Backend {
     const std::uint64_t total = std::uint64_t{1} << 32;
     for (std::uint64_t i = 0; i < g.n; ++i)
       f.phi.push_back(Q32::from_raw(static_cast<std::int64_t>(total / g.n + (i < total % g.n ? 1 : 0))));
-    for (std::uint32_t i = 0; i < g.n; ++i) f.cyberank.push_back(i);
+    for (std::uint32_t i = 0; i < g.n && i < kCyberankPlaces; ++i) f.cyberank.push_back(i);
     return f;
   }
-  Result<Focus<Q32>> focus_update(const Graph& g, const EpochOptions& o, double l2, std::span<const Q32>,
-                                  std::span<const Q32>, std::span<const std::uint32_t>, const ProgressFn& p) override {
+  Result<Focus<Q32>> focus_update(const Graph& g, const EpochOptions& o, double l2, Focus<Q32>,
+                                  std::span<const std::uint32_t>, const ProgressFn& p) override {
     return focus(g, o, l2, p);  // the same uniform focus: no graph information either way
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>&, const Anchor*, const std::string&) override {

@@ -34,11 +34,10 @@ class StageBackend final : public Backend {
     ++calls_[Stage::kFocus];
     return stages_.focus(g, o, lambda2, p);
   }
-  Result<Focus<Q32>> focus_update(const Graph& g, const EpochOptions& o, double lambda2, std::span<const Q32> start,
-                                  std::span<const Q32> start_heat, std::span<const std::uint32_t> region,
-                                  const ProgressFn& p) override {
+  Result<Focus<Q32>> focus_update(const Graph& g, const EpochOptions& o, double lambda2, Focus<Q32> start,
+                                  std::span<const std::uint32_t> region, const ProgressFn& p) override {
     ++calls_[Stage::kFocus];
-    return stages_.focus_update(g, o, lambda2, start, start_heat, region, p);
+    return stages_.focus_update(g, o, lambda2, std::move(start), region, p);
   }
   Result<Frame> frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& an) override {
     ++calls_[Stage::kFrame];

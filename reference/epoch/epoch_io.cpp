@@ -60,17 +60,33 @@ double bound_from(const json& j) { return j.is_null() ? std::numeric_limits<doub
 
 // The carried residual sums (R1-INC-038): each exact integer as its three 64-bit two's complement
 // limbs, most significant first, 48 hex digits.
+// An exact sum as 48 lower-case hex digits of its 192-bit two's complement, most significant first.
+std::string exact_hex(const fx::ExactSum& x) {
+  const auto l = x.limbs();
+  char b[49];
+  std::snprintf(b, sizeof b, "%016llx%016llx%016llx", static_cast<unsigned long long>(l[2]),
+                static_cast<unsigned long long>(l[1]), static_cast<unsigned long long>(l[0]));
+  return b;
+}
+
+std::optional<fx::ExactSum> exact_from_hex(const json& j) {
+  const std::string h = j.is_string() ? j.get<std::string>() : "";
+  if (h.size() != 48) return std::nullopt;
+  std::array<std::uint64_t, 3> l{};
+  for (std::size_t d = 0; d < 48; ++d) {
+    const char ch = h[d];
+    const int v = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+    if (v < 0) return std::nullopt;
+    l[2 - d / 16] = (l[2 - d / 16] << 4) | static_cast<std::uint64_t>(v);
+  }
+  return fx::ExactSum::from_limbs(l);
+}
+
 json sums_json(const Spectrum<Q32>& s) {
   json vectors = json::array();
   for (const auto& v : s.sums) {
     json three = json::array();
-    for (const fx::ExactSum& x : v) {
-      const auto l = x.limbs();
-      char b[49];
-      std::snprintf(b, sizeof b, "%016llx%016llx%016llx", static_cast<unsigned long long>(l[2]),
-                    static_cast<unsigned long long>(l[1]), static_cast<unsigned long long>(l[0]));
-      three.push_back(b);
-    }
+    for (const fx::ExactSum& x : v) three.push_back(exact_hex(x));
     vectors.push_back(three);
   }
   return {{"shift", s.sums_shift}, {"sums", vectors}};
@@ -84,17 +100,9 @@ Status sums_from(const json& j, Spectrum<Q32>& s, const std::string& manifest) {
   for (std::size_t c = 0; c < 5; ++c) {
     if (!vectors[c].is_array() || vectors[c].size() != 3) return Status::input(manifest + ": residual_sums: three sums per vector expected");
     for (std::size_t k = 0; k < 3; ++k) {
-      const std::string h = vectors[c][k].is_string() ? vectors[c][k].get<std::string>() : "";
-      std::array<std::uint64_t, 3> l{};
-      bool ok = h.size() == 48;
-      for (std::size_t d = 0; ok && d < 48; ++d) {
-        const char ch = h[d];
-        const int v = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
-        ok = v >= 0;
-        l[2 - d / 16] = (l[2 - d / 16] << 4) | static_cast<std::uint64_t>(v < 0 ? 0 : v);
-      }
-      if (!ok) return Status::input(manifest + ": residual_sums: vector " + std::to_string(c + 2) + ": not 48 lower-case hex digits");
-      s.sums[c][k] = fx::ExactSum::from_limbs(l);
+      const auto x = exact_from_hex(vectors[c][k]);
+      if (!x) return Status::input(manifest + ": residual_sums: vector " + std::to_string(c + 2) + ": not 48 lower-case hex digits");
+      s.sums[c][k] = *x;
     }
     // Sums of squares are never negative.
     if (s.sums[c][0].signum() < 0 || s.sums[c][2].signum() < 0)
@@ -279,6 +287,8 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
                 {"lambda_max", e.focus.lambda_max},
                 {"syntropy", e.focus.syntropy},
                 {"top", top}};
+  // The exact sum behind the syntropy, which the next incremental epoch updates (R1-INC-054).
+  if (e.focus.plogp) m["focus"]["plogp"] = exact_hex(*e.focus.plogp);
   json counts = json::array(), radii = json::array();
   for (std::size_t l = 0; l < kLevels; ++l) {
     counts.push_back(e.hierarchy.levels[l].size());
@@ -442,6 +452,12 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   e.spectral_params.basis = pj.at("basis").get<std::uint32_t>();
   e.spectral_params.tolerance = pj.at("tolerance").get<double>();
   if (m.contains("update")) e.update = update_from(m.at("update"));
+  if (m.at("focus").contains("plogp")) {
+    e.focus.plogp = exact_from_hex(m.at("focus").at("plogp"));
+    // phi ln phi is never positive for 0 < phi <= 1.
+    if (!e.focus.plogp || e.focus.plogp->signum() > 0)
+      return Status::input(manifest + ": focus.plogp: not 48 lower-case hex digits of a sum at most 0");
+  }
 
   EpochFiles files(dir, n);
   R1_TRY(files.load(m.at("files")));

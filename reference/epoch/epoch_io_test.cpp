@@ -146,6 +146,21 @@ TEST(EpochIo, MalformedResidualSumsAreRefused) {
   bad = m;
   bad["residual_sums"]["sums"].erase(4);
   refused(bad, "a shift of 0..16 and five vectors expected");
+  // The carried sum of phi ln phi (R1-INC-054): 48 hex digits of a sum at most 0.
+  const auto plogp = [&](const std::string& hex) {
+    auto with = m;
+    with["focus"]["plogp"] = hex;
+    r1::test::write_file(d / "ep/manifest.json", with.dump(2));
+    return r1::read_epoch(d / "ep");
+  };
+  for (const std::string& hex : {std::string(47, '0') + "1", std::string("xyz"), std::string(48, 'F')}) {
+    const auto r = plogp(hex);
+    ASSERT_FALSE(r.is_ok()) << hex;
+    EXPECT_NE(r.status().message().find("manifest.json: focus.plogp: "), std::string::npos) << r.status().message();
+  }
+  const auto minus_one = plogp(std::string(48, 'f'));
+  ASSERT_TRUE(minus_one.is_ok()) << minus_one.status().message();
+  EXPECT_EQ(minus_one->focus.plogp, std::optional<r1::fx::ExactSum>(r1::fx::ExactSum::from_limbs({~0ull, ~0ull, ~0ull})));
   r1::test::write_file(d / "ep/manifest.json", manifest);
   EXPECT_TRUE(r1::read_epoch(d / "ep").is_ok());
 }

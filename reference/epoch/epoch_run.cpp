@@ -96,12 +96,12 @@ Result<Focus<Q32>> ReferenceStages::focus(const Graph& g, const EpochOptions& o,
 }
 
 Result<Focus<Q32>> ReferenceStages::focus_update(const Graph& g, const EpochOptions& o, double lambda2,
-                                                 std::span<const Q32> start, std::span<const Q32> start_heat,
-                                                 std::span<const std::uint32_t> region, const ProgressFn& p) {
+                                                 Focus<Q32> start, std::span<const std::uint32_t> region,
+                                                 const ProgressFn& p) {
   if (fp64_ || o.domain != NumericDomain::kQ32) return Status::input("focus update: the fp64 domain has no local update");
   FocusOptions fo;
   fo.parallel = o.parallel || parallel_;  // R1-FOC-090: the same bits
-  return update_focus_q32(g, o.trikernel, lambda2, start, start_heat, region, p, fo);
+  return update_focus_q32(g, o.trikernel, lambda2, std::move(start), region, p, fo);
 }
 
 Result<Frame> ReferenceStages::frame(const Snapshot& s, const Spectrum<Q32>& c, const Anchor* a, const std::string& name) {

@@ -704,7 +704,8 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   s.matvecs = 10;  // two applications of the rows for the residuals (one block product each)
   s.passes = 2;
   e.timings.push_back({"batch", batch_s});  // the edit batch and N_h (R1-INC-010..021)
-  e.timings.push_back({"carry", carry_s});  // PREV's vectors and image gathered by particle: O(|P|) copies
+  const std::size_t carry_at = e.timings.size();
+  e.timings.push_back({"carry", carry_s});  // PREV's vectors, image and focus gathered by particle: O(|P|) copies
   e.timings.push_back({std::string(stage_name(Stage::kSpectral)), spectral_s});  // the local update on N_h
   e.timings.push_back({"certificate", global_s});  // the carried sums (or, without them, a product over all particles)
   clock = std::chrono::steady_clock::now();
@@ -712,17 +713,27 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   {
     // phi on N_h from PREV's, every other particle frozen (R1-INC-050); the full iteration when
     // the frozen particles leave the region less than one raw each.
-    std::vector<Q32> start(n), start_heat;
+    // Gathered by particle like the vectors, and timed with them (`carry`).
+    const auto t_start = std::chrono::steady_clock::now();
+    Focus<Q32> start;
+    start.phi.resize(n);
     for (std::size_t i = 0; i < n; ++i)
-      if (batch.prev_of[i] >= 0) start[i] = prev.focus.phi[static_cast<std::size_t>(batch.prev_of[i])];
+      if (batch.prev_of[i] >= 0) start.phi[i] = prev.focus.phi[static_cast<std::size_t>(batch.prev_of[i])];
     // The carried heat term (R1-INC-052), an added particle 0; without it (PREV's lambda_h was 0,
     // which the parameter check makes NEXT's too) none is needed.
     if (!prev.focus.heat.empty()) {
-      start_heat.resize(n);
+      start.heat.resize(n);
       for (std::size_t i = 0; i < n; ++i)
-        if (batch.prev_of[i] >= 0) start_heat[i] = prev.focus.heat[static_cast<std::size_t>(batch.prev_of[i])];
+        if (batch.prev_of[i] >= 0) start.heat[i] = prev.focus.heat[static_cast<std::size_t>(batch.prev_of[i])];
     }
-    auto local = stages.focus_update(g, options, lambda2, start, start_heat, nh, progress);
+    // The carried sum of phi ln phi (R1-INC-054) without the particles that left.
+    if (prev.focus.plogp) {
+      start.plogp = *prev.focus.plogp;
+      for (const std::uint32_t p : batch.left) start.plogp->add_term(-phi_log_phi(prev.focus.phi[p]));
+    }
+    e.timings[carry_at].seconds += since(t_start);
+    clock = std::chrono::steady_clock::now();
+    auto local = stages.focus_update(g, options, lambda2, std::move(start), nh, progress);
     if (local.is_ok()) {
       e.focus = std::move(*local);
       info.focus_local = true;

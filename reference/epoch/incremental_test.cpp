@@ -237,6 +237,9 @@ TEST(Incremental, AnEmptyBatchKeepsEverything) {
 // chain, exactly what one pass over every particle of its own graph gives: the image numerators
 // of L~ u and the three sums per vector. The chain adds links, reweights, adds a particle and
 // drops one, at h = 0, 1 and 2, so rows of F and rows reached only through N_h both change.
+// The carried image, residual sums and sum of phi ln phi (R1-INC-038, R1-INC-054) equal passes over
+// the whole graph along a chain with added, reweighted and removed links and particles, read back
+// from their directories at each link.
 TEST(Incremental, TheCarriedImageAndSumsAreTheWholeGraphsBitForBit) {
   r1::Snapshot s = rgg(1200, 5);
   r1::Epoch prev = full_epoch(s);
@@ -250,6 +253,9 @@ TEST(Incremental, TheCarriedImageAndSumsAreTheWholeGraphsBitForBit) {
     EXPECT_EQ(e.spectrum.sums_shift, op->e / 2) << what;
     EXPECT_TRUE(image == e.spectrum.image) << what;
     EXPECT_TRUE(sums == e.spectrum.sums) << what;
+    r1::fx::ExactSum plogp;
+    for (const r1::Q32 x : e.focus.phi) plogp.add_term(r1::phi_log_phi(x));
+    EXPECT_EQ(e.focus.plogp, std::optional<r1::fx::ExactSum>(plogp)) << what;
   };
   check(prev, graph(s), "the full epoch");
   const r1::Anchor anchor = r1::make_anchor(s, prev.frame);
@@ -283,6 +289,8 @@ TEST(Incremental, TheCarriedImageAndSumsAreTheWholeGraphsBitForBit) {
     EXPECT_TRUE(back->spectrum.image == e->spectrum.image);
     EXPECT_TRUE(back->spectrum.sums == e->spectrum.sums);
     EXPECT_EQ(back->spectrum.sums_shift, e->spectrum.sums_shift);
+    EXPECT_EQ(back->focus.plogp, e->focus.plogp);
+    ASSERT_TRUE(e->update->focus_local);
     prev = std::move(*back);
     s = std::move(next);
   }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <new>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -48,30 +49,55 @@ Q32 log_count(std::uint32_t n) {
   return fx::log(scaled) + Q32::from_raw(fx::kLn2.raw * k);
 }
 
-// Particle indices by phi descending, ties to the lower index: a strict total order (R1-FOC-070).
+// The first min(n, kCyberankPlaces) particle indices by phi descending, ties to the lower index:
+// a strict total order, so the places are unique (R1-FOC-070).
 template <class Key>
-std::vector<std::uint32_t> rank_by(const std::vector<Key>& key) {
+std::vector<std::uint32_t> rank_by(std::span<const Key> key) {
   std::vector<std::uint32_t> order(key.size());
   std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&key](std::uint32_t a, std::uint32_t b) {
+  const auto places = static_cast<std::ptrdiff_t>(std::min<std::size_t>(key.size(), kCyberankPlaces));
+  std::partial_sort(order.begin(), order.begin() + places, order.end(), [&key](std::uint32_t a, std::uint32_t b) {
     return key[a] != key[b] ? key[b] < key[a] : a < b;
   });
+  order.resize(static_cast<std::size_t>(places));
   return order;
 }
 
-// The same order for Q32 phi (raws 1..2^32, as every focus holds): one 64-bit key per particle,
-// (2^32 - raw) above the index, sorted ascending, so no comparison reads phi again.
-std::vector<std::uint32_t> rank_by(const std::vector<Q32>& phi) {
+// The same places for Q32 phi (raws 1..2^32, as every focus holds): one 64-bit key per particle,
+// (2^32 - raw) above the index, the smallest keys kept in a max-heap of the places, so one pass
+// over phi and no array of n.
+std::vector<std::uint32_t> rank_by(std::span<const Q32> phi) {
   constexpr std::int64_t kTop = std::int64_t{1} << 32;
-  std::vector<std::uint64_t> keys(phi.size());
+  const std::size_t places = std::min<std::size_t>(phi.size(), kCyberankPlaces);
+  std::vector<std::uint64_t> heap;
+  heap.reserve(places);
   for (std::size_t i = 0; i < phi.size(); ++i) {
     if (phi[i].raw < 1 || phi[i].raw > kTop) return rank_by<Q32>(phi);
-    keys[i] = (static_cast<std::uint64_t>(kTop - phi[i].raw) << 32) | i;
+    const std::uint64_t key = (static_cast<std::uint64_t>(kTop - phi[i].raw) << 32) | i;
+    if (heap.size() < places) {
+      heap.push_back(key);
+      std::push_heap(heap.begin(), heap.end());
+    } else if (key < heap.front()) {
+      std::pop_heap(heap.begin(), heap.end());
+      heap.back() = key;
+      std::push_heap(heap.begin(), heap.end());
+    }
   }
-  std::sort(keys.begin(), keys.end());
-  std::vector<std::uint32_t> order(phi.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
+  std::sort_heap(heap.begin(), heap.end());
+  std::vector<std::uint32_t> order(heap.size());
+  for (std::size_t k = 0; k < heap.size(); ++k) order[k] = static_cast<std::uint32_t>(heap[k]);
   return order;
+}
+
+fx::ExactSum plogp_of(std::span<const Q32> phi, bool parallel) {
+  const auto n = static_cast<std::uint32_t>(phi.size());
+  std::vector<Q32> logs(n);
+  focus::for_rows(parallel, n, [&](std::uint32_t b, std::uint32_t e) {
+    for (std::uint32_t i = b; i < e; ++i) logs[i] = phi[i].raw < 1 ? Q32{} : fx::log(phi[i]);
+  });
+  fx::ExactSum s;
+  for (std::uint32_t i = 0; i < n; ++i) s.add_product(phi[i], logs[i]);
+  return s;
 }
 
 // Runs a stage body and turns the exceptions a numeric path can raise into Status values
@@ -102,6 +128,8 @@ Focus<Scalar> make_result(std::vector<Scalar> phi, const FocusPlan& plan) {
 }
 
 }  // namespace
+
+i128 phi_log_phi(Q32 x) { return x.raw < 1 ? 0 : static_cast<i128>(x.raw) * fx::log(x).raw; }
 
 Status validate_tri_kernel_params(const TriKernelParams& p) {
   if (!in_unit(p.lambda_d)) return bad_param("lambda_d", p.lambda_d, "[0, 1]");
@@ -186,19 +214,17 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
   }
 }
 
-// Syntropy RNE(sum phi_i ln phi_i + ln n), an exact sum (R1-FOC-071), and cyberank (R1-FOC-070).
-Focus<Q32> finish_q32(std::vector<Q32> phi, const FocusPlan& plan, bool parallel) {
+// Syntropy RNE(sum phi_i ln phi_i + ln n), an exact sum (R1-FOC-071), from `plogp` when the
+// caller has it (R1-INC-054), and cyberank (R1-FOC-070).
+Focus<Q32> finish_q32(std::vector<Q32> phi, const FocusPlan& plan, bool parallel,
+                      const std::optional<fx::ExactSum>& plogp = std::nullopt) {
   const auto n = static_cast<std::uint32_t>(phi.size());
-  std::vector<Q32> logs(n);
-  focus::for_rows(parallel, n, [&](std::uint32_t b, std::uint32_t e) {
-    for (std::uint32_t i = b; i < e; ++i) logs[i] = fx::log(phi[i]);
-  });
-  fx::ExactSum j;
-  for (std::uint32_t i = 0; i < n; ++i) j.add_product(phi[i], logs[i]);
-  j.add(log_count(n));
+  fx::ExactSum j = plogp ? *plogp : plogp_of(phi, parallel);
   Focus<Q32> f = make_result(std::move(phi), plan);
+  f.plogp = j;
+  j.add(log_count(n));
   f.syntropy = j.round().to_double();
-  f.cyberank = rank_by(f.phi);
+  f.cyberank = rank_by(std::span<const Q32>(f.phi));
   return f;
 }
 
@@ -230,29 +256,38 @@ Result<std::vector<Q32>> heat_term_q32(const Graph& g, const TriKernelParams& p,
   });
 }
 
-Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, double lambda2, std::span<const Q32> start,
-                                    std::span<const Q32> start_heat, std::span<const std::uint32_t> region,
-                                    const ProgressFn& progress, const FocusOptions& options) {
+Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, double lambda2, Focus<Q32> start,
+                                    std::span<const std::uint32_t> region, const ProgressFn& progress,
+                                    const FocusOptions& options) {
   return guarded([&]() -> Result<Focus<Q32>> {
     R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
-    if (start.size() != g.n)
-      return Status::input("focus update: " + std::to_string(start.size()) + " start values for " + std::to_string(g.n) + " particles");
+    if (start.phi.size() != g.n)
+      return Status::input("focus update: " + std::to_string(start.phi.size()) + " start values for " + std::to_string(g.n) + " particles");
     const bool use_h = p.lambda_h.raw != 0;
-    if (use_h && start_heat.size() != g.n)
-      return Status::input("focus update: " + std::to_string(start_heat.size()) + " start heat values for " + std::to_string(g.n) +
+    if (use_h && start.heat.size() != g.n)
+      return Status::input("focus update: " + std::to_string(start.heat.size()) + " start heat values for " + std::to_string(g.n) +
                            " particles");
-    std::vector<Q32> phi(start.begin(), start.end());
+    for (std::size_t a = 0; a < region.size(); ++a)
+      if (region[a] >= g.n || (a > 0 && region[a] <= region[a - 1]))
+        return Status::input("focus update: region entry " + std::to_string(a) + " out of range or out of order");
+    std::vector<Q32> phi = std::move(start.phi);
     // The frozen particles keep their raws (each at least 1); the region holds the rest of 2^32
-    // (R1-INC-051).
-    std::vector<char> inside(g.n, 0);
-    for (const std::uint32_t i : region)
-      if (i < g.n) inside[i] = 1;
+    // (R1-INC-051). One pass over phi with no array beside it: the raws of at least 1 and the
+    // count of the others, then the region's taken out.
     u128 frozen = 0;
-    for (std::uint32_t i = 0; i < g.n; ++i) {
-      if (inside[i]) continue;
-      if (phi[i].raw < 1) return Status::input("focus update: frozen particle " + std::to_string(i) + " has phi raw " + std::to_string(phi[i].raw) + " < 1");
-      frozen += static_cast<std::uint64_t>(phi[i].raw);
+    std::uint64_t below = 0;
+    for (const Q32 x : phi) {
+      if (x.raw < 1) ++below;
+      else frozen += static_cast<std::uint64_t>(x.raw);
     }
+    for (const std::uint32_t i : region) {
+      if (phi[i].raw < 1) --below;
+      else frozen -= static_cast<std::uint64_t>(phi[i].raw);
+    }
+    if (below != 0)
+      for (std::uint32_t i = 0; i < g.n; ++i)
+        if (phi[i].raw < 1 && !std::binary_search(region.begin(), region.end(), i))
+          return Status::input("focus update: frozen particle " + std::to_string(i) + " has phi raw " + std::to_string(phi[i].raw) + " < 1");
     const u128 one = u128{1} << 32;
     if (frozen + region.size() > one)
       return Status::input("focus update: the frozen particles hold " + std::to_string(static_cast<std::uint64_t>(frozen)) +
@@ -263,8 +298,8 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
       if (total != 0)
         return Status::input("focus update: no region, and the start sums to " + std::to_string(static_cast<std::uint64_t>(frozen)) +
                              " raws, not 2^32");
-      Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel);
-      if (use_h) f.heat.assign(start_heat.begin(), start_heat.end());
+      Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel, start.plogp);
+      if (use_h) f.heat = std::move(start.heat);
       return f;
     }
     std::vector<std::uint32_t> global;
@@ -272,6 +307,10 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
     std::vector<Q32> x(global.size());
     for (std::size_t a = 0; a < global.size(); ++a) x[a] = phi[global[a]];
     const auto active = static_cast<std::uint32_t>(region.size());
+    // The start's sum of phi ln phi without the region's terms (R1-INC-054).
+    std::optional<fx::ExactSum> plogp = start.plogp;
+    if (plogp)
+      for (std::uint32_t a = 0; a < active; ++a) plogp->add_term(-phi_log_phi(x[a]));
     // The heat term (R1-INC-052): inside the region's ring the walk runs on, beyond it the start
     // holds. The ring stands in for the rest of the graph as fixed points, which the start is not,
     // so the step uses start_heat + H_local(x) - H_local(start): the carried heat at the start
@@ -283,7 +322,7 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
       focus::heat_q32(ops, heat, x, hl);
       heat_offset.resize(active);
       for (std::uint32_t a = 0; a < active; ++a) {
-        const i128 d = i128{start_heat[global[a]].raw} - hl[a].raw;
+        const i128 d = i128{start.heat[global[a]].raw} - hl[a].raw;
         if (!fx::detail::fits_i64(d)) return Status::input("focus update: start heat of particle " + std::to_string(global[a]) + " out of range");
         heat_offset[a] = static_cast<std::int64_t>(d);
       }
@@ -293,10 +332,12 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
     focus::project_onto(first, total, std::span<Q32>(x).first(active));
     run_steps_q32(ops, p, plan.steps, active, total, options.parallel, x, progress, heat_offset);
     for (std::uint32_t a = 0; a < active; ++a) phi[global[a]] = x[a];
+    if (plogp)
+      for (std::uint32_t a = 0; a < active; ++a) plogp->add_term(phi_log_phi(x[a]));
     // The result's heat: the carried one, and on the region the step's term at the result.
     std::vector<Q32> result_heat;
     if (use_h) {
-      result_heat.assign(start_heat.begin(), start_heat.end());
+      result_heat = std::move(start.heat);
       std::vector<Q32> hl;
       focus::heat_q32(ops, heat, x, hl);
       for (std::uint32_t a = 0; a < active; ++a) {
@@ -305,7 +346,7 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
         result_heat[global[a]] = Q32::from_raw(static_cast<std::int64_t>(v));
       }
     }
-    Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel);
+    Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel, plogp);
     f.heat = std::move(result_heat);
     return f;
   });
@@ -355,7 +396,7 @@ Result<Focus<double>> compute_focus_f64(const Graph& g, const TriKernelParams& p
     const double syntropy = fx::pairwise_sum(terms) + log_count(n).to_double();
     Focus<double> f = make_result(std::move(phi), plan);
     f.syntropy = syntropy;
-    f.cyberank = rank_by(f.phi);
+    f.cyberank = rank_by(std::span<const double>(f.phi));
     return f;
   });
 }

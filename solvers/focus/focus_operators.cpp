@@ -227,6 +227,7 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   };
   std::vector<std::int64_t> walk_offset(count, -1), out_offset(count, -1);
   ops.pattern_.n = count;
+  ops.fixed_from_ = r;
   ops.pattern_.in_ptr.assign(std::size_t{count} + 1, 0);
   for (std::uint32_t a = 0; a < r; ++a) {
     const std::uint32_t q = region[a];
@@ -280,7 +281,7 @@ void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) co
   for (const std::uint32_t p : pattern_.dangling) dangling_mass += phi[p].raw;
   // c = RNE((1 - t) m + t): the dangling mass and the teleport both go to the prior.
   const std::int64_t c = round_q32(static_cast<i128>(one_minus_t_) * dangling_mass + (static_cast<i128>(teleport_) << 32));
-  for_rows(parallel_, n(), [&](std::uint32_t b, std::uint32_t e) {
+  for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t q = b; q < e; ++q) {
       i128 acc = 0;
       for (std::uint64_t s = pattern_.in_ptr[q]; s < pattern_.in_ptr[q + 1]; ++s)
@@ -293,7 +294,7 @@ void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) co
 
 void OperatorsQ32::springs(std::span<const Q32> phi, std::vector<Q32>& out) const {
   out.resize(n());
-  for_rows(parallel_, n(), [&](std::uint32_t b, std::uint32_t e) {
+  for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t i = b; i < e; ++i) {
       i128 num = static_cast<i128>(springs_a_) << 32;
       for (std::uint64_t k = row_ptr_[i]; k < row_ptr_[i + 1]; ++k) num += static_cast<i128>(w_[k]) * phi[col_[k]].raw;

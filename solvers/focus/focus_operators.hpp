@@ -75,6 +75,10 @@ class OperatorsQ32 {
                                           std::vector<std::uint32_t>& local_to_global);
 
   std::uint32_t n() const { return pattern_.n; }
+  // The rows from this index on are build_local's ring: empty rows, fixed points of the walk
+  // (n() for build()). Diffusion and springs leave their entries 0 (never used); the heat kernel
+  // carries them in closed form.
+  std::uint32_t fixed_from() const { return std::min(fixed_from_, n()); }
   const std::vector<Q32>& prior() const { return prior_; }
 
   // D(phi) (R1-FOC-021), S(phi) (R1-FOC-030), N x (R1-FOC-041); `out` is resized to n.
@@ -106,6 +110,7 @@ class OperatorsQ32 {
   std::vector<std::int64_t> walk_;   // N(i, j) at A_sym entry (i, j), raw
   std::int64_t one_minus_t_ = 0, teleport_ = 0, mu_ = 0, springs_a_ = 0;
   i128 frozen_dangling_ = 0;         // build_local: the dangling phi outside the region, exact
+  std::uint32_t fixed_from_ = UINT32_MAX;  // build_local: |R|
   // build_local's rows (the pointers above point into it; shared, so copies stay valid).
   struct LocalRows {
     std::vector<std::uint64_t> row_ptr, degree;

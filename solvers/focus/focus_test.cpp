@@ -521,8 +521,9 @@ RC_GTEST_PROP(FocusIteration, ConservationAndPositivity, ()) {
   }
   RC_ASSERT(sum == ONE);
   RC_ASSERT(q->steps >= 1u && q->steps <= p.max_steps);
-  RC_ASSERT(q->cyberank.size() == g.n);
-  // cyberank: every particle once, phi descending, ties by the lower index (R1-FOC-070).
+  RC_ASSERT(q->cyberank.size() == std::min<std::size_t>(g.n, r1::kCyberankPlaces));
+  // cyberank: the leading places, each particle once, phi descending, ties by the lower index
+  // (R1-FOC-070).
   std::vector<char> seen(g.n, 0);
   for (std::size_t k = 0; k < q->cyberank.size(); ++k) {
     const auto b = q->cyberank[k];
@@ -547,6 +548,51 @@ RC_GTEST_PROP(FocusIteration, ConservationAndPositivity, ()) {
 // The local update (R1-INC-050..051) on random graphs (dangling sources, isolated particles,
 // several components), random parameters, random regions and random positive starts: exact
 // conservation, positivity, and the frozen particles' bits.
+// The heat kernel on a region's operators runs its loops on the region's rows and carries the
+// ring (empty rows, fixed points of the walk) in closed form: the result equals the plain
+// Chebyshev recurrence over every local row bit for bit (R1-INC-052).
+RC_GTEST_PROP(FocusUpdate, RegionHeatIsThePlainRecurrence, ()) {
+  const Graph g = random_graph();
+  const TriKernelParams p = random_params();
+  std::vector<std::uint32_t> region;
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    if (*rc::gen::inRange(0, 3) == 0) region.push_back(i);
+  if (region.empty()) region.push_back(0);
+  std::vector<Q32> phi(g.n);
+  for (auto& x : phi) x = Q32::from_raw(*rc::gen::inRange<std::int64_t>(1, ONE));
+  std::vector<std::uint32_t> global;
+  const auto ops = r1::focus::OperatorsQ32::build_local(g, p, false, region, phi, global);
+  RC_ASSERT(ops.is_ok());
+  RC_ASSERT(ops->fixed_from() == region.size());
+  std::vector<Q32> x(global.size());
+  for (std::size_t a = 0; a < global.size(); ++a) x[a] = phi[global[a]];
+  const r1::HeatCoefficients coeff = r1::heat_coefficients(p.tau, p.chebyshev_degree);
+  std::vector<Q32> fast;
+  r1::focus::heat_q32(*ops, coeff, x, fast);
+  // The recurrence as R1-FOC-043 writes it, every row through walk_row.
+  const std::size_t n = x.size();
+  std::vector<Q32> t0 = x, t1(n), t2(n);
+  for (std::uint32_t sub = 0; sub < coeff.substeps; ++sub) {
+    std::vector<r1::i128> acc(n);
+    for (std::size_t i = 0; i < n; ++i) acc[i] = static_cast<r1::i128>(coeff.q32[0].raw) * t0[i].raw;
+    if (coeff.q32.size() > 1)
+      for (std::uint32_t i = 0; i < n; ++i) {
+        t1[i] = Q32::from_raw(r1::focus::round_q32(ops->walk_row(i, t0.data())));
+        acc[i] += static_cast<r1::i128>(coeff.q32[1].raw) * t1[i].raw;
+      }
+    for (std::size_t k = 2; k < coeff.q32.size(); ++k) {
+      for (std::uint32_t i = 0; i < n; ++i) {
+        t2[i] = Q32::from_raw(r1::focus::round_q32(2 * ops->walk_row(i, t1.data()) - (static_cast<r1::i128>(t0[i].raw) << 32)));
+        acc[i] += static_cast<r1::i128>(coeff.q32[k].raw) * t2[i].raw;
+      }
+      std::swap(t0, t1);
+      std::swap(t1, t2);
+    }
+    for (std::size_t i = 0; i < n; ++i) t0[i] = Q32::from_raw(r1::focus::round_q32(acc[i]));
+  }
+  RC_ASSERT(fast == t0);
+}
+
 RC_GTEST_PROP(FocusUpdate, ConservesPositiveAndFreezesOutside, ()) {
   const Graph g = random_graph();
   const TriKernelParams p = random_params();
@@ -564,8 +610,20 @@ RC_GTEST_PROP(FocusUpdate, ConservesPositiveAndFreezesOutside, ()) {
     RC_ASSERT(h.is_ok());
     heat = std::move(*h);
   }
-  const auto f = r1::update_focus_q32(g, p, lambda2, start, heat, region);
+  // With the start's exact sum of phi ln phi carried (R1-INC-054) or without it.
+  r1::Focus<Q32> from;
+  from.phi = start;
+  from.heat = heat;
+  if (*rc::gen::arbitrary<bool>()) {
+    from.plogp.emplace();
+    for (const Q32 x : start) from.plogp->add_term(r1::phi_log_phi(x));
+  }
+  const auto f = r1::update_focus_q32(g, p, lambda2, std::move(from), region);
   RC_ASSERT(f.is_ok());
+  // The result's sum is the exact sum over its own phi, carried or not.
+  r1::fx::ExactSum plogp;
+  for (const Q32 x : f->phi) plogp.add_term(r1::phi_log_phi(x));
+  RC_ASSERT(f->plogp == std::optional<r1::fx::ExactSum>(plogp));
   std::vector<char> inside(g.n, 0);
   for (const auto i : region) inside[i] = 1;
   std::int64_t sum = 0;
@@ -736,6 +794,30 @@ TEST(FocusIteration, SyntropyAndCyberank) {
     const auto a = q->cyberank[k - 1], b = q->cyberank[k];
     EXPECT_TRUE(q->phi[a] > q->phi[b] || (q->phi[a] == q->phi[b] && a < b));
   }
+}
+
+// Beyond kCyberankPlaces particles the order keeps its leading places: those of a full sort of
+// phi (descending, ties to the lower index), in the Q32 and the fp64 domain.
+TEST(FocusIteration, CyberankKeepsTheLeadingPlaces) {
+  const Graph g = generated(r1::GenKind::kBa, 3000, 3);
+  const auto q = r1::compute_focus_q32(g, TriKernelParams{}, 0.1);
+  const auto f = r1::compute_focus_f64(g, TriKernelParams{}, 0.1);
+  ASSERT_TRUE(q.is_ok() && f.is_ok());
+  const auto sorted = [](const auto& phi) {
+    std::vector<std::uint32_t> order(phi.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&phi](std::uint32_t a, std::uint32_t b) { return phi[b] < phi[a]; });
+    order.resize(r1::kCyberankPlaces);
+    return order;
+  };
+  EXPECT_EQ(q->cyberank, sorted(q->phi));
+  EXPECT_EQ(f->cyberank, sorted(f->phi));
+  // A ring's phi takes a few raws only: most places are ties, settled by index.
+  const Graph ring = generated(r1::GenKind::kRing, 2000);
+  const auto r = r1::compute_focus_q32(ring, TriKernelParams{}, 0.1);
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->cyberank, sorted(r->phi));
+  EXPECT_EQ(r->phi[r->cyberank[1]], r->phi[r->cyberank[2]]);
 }
 
 TEST(FocusIteration, ProgressCountsSteps) {

@@ -55,6 +55,19 @@ std::vector<Q32> heat_of(const Graph& g, const TriKernelParams& p, const std::ve
   return std::move(h).value();
 }
 
+// The start of an update: phi and its heat, with the exact sum of phi ln phi when `carried`
+// (R1-INC-054).
+r1::Focus<Q32> start_focus(const std::vector<Q32>& phi, const std::vector<Q32>& heat, bool carried = true) {
+  r1::Focus<Q32> f;
+  f.phi = phi;
+  f.heat = heat;
+  if (carried) {
+    f.plogp.emplace();
+    for (const Q32 x : phi) f.plogp->add_term(r1::phi_log_phi(x));
+  }
+  return f;
+}
+
 double l1(const std::vector<Q32>& a, const std::vector<Q32>& b) {
   double s = 0;
   for (std::size_t i = 0; i < a.size(); ++i) s += std::fabs(static_cast<double>(a[i].raw - b[i].raw)) * 0x1p-32;
@@ -78,13 +91,17 @@ TEST(FocusUpdate, WholeRegionIsTheFullIteration) {
     par.parallel = true;
     const auto full = r1::compute_focus_q32(g, p, 0.25);
     const std::vector<Q32> start = start_of(g, p), heat = heat_of(g, p, start);
-    const auto local = r1::update_focus_q32(g, p, 0.25, start, heat, all);
-    const auto local_par = r1::update_focus_q32(g, p, 0.25, start, heat, all, {}, par);
+    const auto local = r1::update_focus_q32(g, p, 0.25, start_focus(start, heat), all);
+    const auto local_par = r1::update_focus_q32(g, p, 0.25, start_focus(start, heat, false), all, {}, par);
     ASSERT_TRUE(full.is_ok() && local.is_ok() && local_par.is_ok()) << local.status().message();
     EXPECT_EQ(local->phi, full->phi) << "n " << g.n;
     EXPECT_EQ(local_par->phi, full->phi);
     EXPECT_EQ(local->steps, full->steps);
+    // The syntropy's exact sum, carried from the start's or summed over every particle.
+    EXPECT_EQ(local->plogp, full->plogp);
+    EXPECT_EQ(local_par->plogp, full->plogp);
     EXPECT_EQ(local->syntropy, full->syntropy);
+    EXPECT_EQ(local_par->syntropy, full->syntropy);
     EXPECT_EQ(local->cyberank, full->cyberank);
     // The carried heat is the heat of the result, as a full epoch's.
     EXPECT_EQ(local->heat, full->heat);
@@ -124,8 +141,13 @@ TEST(FocusUpdate, ApproachesTheEditedFixedPoint) {
   for (const std::uint32_t h : {1u, 2u, 4u}) {
     const auto region = r1::neighbourhood(g1, touched, h);
     // The heat the earlier epoch carries: its own phi's on its own graph.
-    const auto local = r1::update_focus_q32(g1, p, 0.01, before->phi, before->heat, region);
+    const auto local = r1::update_focus_q32(g1, p, 0.01, *before, region);
     ASSERT_TRUE(local.is_ok()) << local.status().message();
+    // The carried sum equals a pass over the result (R1-INC-054).
+    const auto whole = r1::update_focus_q32(g1, p, 0.01, start_focus(local->phi, local->heat, false), {});
+    ASSERT_TRUE(whole.is_ok());
+    EXPECT_EQ(local->plogp, whole->plogp);
+    EXPECT_EQ(local->syntropy, whole->syntropy);
     const double left = l1(local->phi, after->phi);
     RecordProperty("l1_left_h" + std::to_string(h), sci(left) + " of " + sci(moved) + ", region " + std::to_string(region.size()));
     // Measured: 53% (h = 1), 48% (h = 2), 41% (h = 4) of the distance is left: mass that the new
@@ -138,7 +160,7 @@ TEST(FocusUpdate, ApproachesTheEditedFixedPoint) {
     }
     r1::FocusOptions par;
     par.parallel = true;
-    const auto again = r1::update_focus_q32(g1, p, 0.01, before->phi, before->heat, region, {}, par);
+    const auto again = r1::update_focus_q32(g1, p, 0.01, *before, region, {}, par);
     ASSERT_TRUE(again.is_ok());
     EXPECT_EQ(again->phi, local->phi);
   }
@@ -148,32 +170,32 @@ TEST(FocusUpdate, BadInputIsAnInputError) {
   const Graph g = graph_of(generated(r1::GenKind::kRing, 12, 1));
   TriKernelParams p;
   const std::vector<Q32> start = start_of(g, p), heat = heat_of(g, p, start);
-  const auto bad_order = r1::update_focus_q32(g, p, 0.1, start, heat, std::vector<std::uint32_t>{3, 2});
+  const auto bad_order = r1::update_focus_q32(g, p, 0.1, start_focus(start, heat), std::vector<std::uint32_t>{3, 2});
   ASSERT_FALSE(bad_order.is_ok());
   EXPECT_NE(bad_order.status().message().find("out of order"), std::string::npos);
   // No region (an empty batch): the start, bit for bit, when it is a focus; else an input error.
-  const auto none = r1::update_focus_q32(g, p, 0.1, start, heat, std::vector<std::uint32_t>{});
+  const auto none = r1::update_focus_q32(g, p, 0.1, start_focus(start, heat), std::vector<std::uint32_t>{});
   ASSERT_TRUE(none.is_ok()) << none.status().message();
   EXPECT_EQ(none->phi, start);
   std::vector<Q32> short_start = start;
   short_start[0] = Q32::from_raw(short_start[0].raw - 1);
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, short_start, heat, std::vector<std::uint32_t>{}).is_ok());
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start, heat, std::vector<std::uint32_t>{12}).is_ok());
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, std::vector<Q32>(11, Q32::from_raw(1)), heat, std::vector<std::uint32_t>{0}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start_focus(short_start, heat), std::vector<std::uint32_t>{}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start_focus(start, heat), std::vector<std::uint32_t>{12}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start_focus(std::vector<Q32>(11, Q32::from_raw(1)), heat), std::vector<std::uint32_t>{0}).is_ok());
   // Frozen particles that hold all 2^32 raws leave nothing for the region.
   std::vector<Q32> greedy(g.n, Q32::from_raw(1));
   greedy[0] = Q32::from_raw(ONE - static_cast<std::int64_t>(g.n) + 2);
-  const auto starved = r1::update_focus_q32(g, p, 0.1, greedy, heat, std::vector<std::uint32_t>{5, 6});
+  const auto starved = r1::update_focus_q32(g, p, 0.1, start_focus(greedy, heat), std::vector<std::uint32_t>{5, 6});
   ASSERT_FALSE(starved.is_ok());
   EXPECT_NE(starved.status().message().find("fewer than one"), std::string::npos);
   // The heat must come with every particle.
-  const auto no_heat = r1::update_focus_q32(g, p, 0.1, start, std::vector<Q32>(3), std::vector<std::uint32_t>{5});
+  const auto no_heat = r1::update_focus_q32(g, p, 0.1, start_focus(start, std::vector<Q32>(3)), std::vector<std::uint32_t>{5});
   ASSERT_FALSE(no_heat.is_ok());
   EXPECT_NE(no_heat.status().message().find("3 start heat values for 12 particles"), std::string::npos) << no_heat.status().message();
   // A frozen raw below 1 is not a focus.
   std::vector<Q32> zero = start;
   zero[1] = Q32::from_raw(0);
-  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, zero, heat, std::vector<std::uint32_t>{5}).is_ok());
+  EXPECT_FALSE(r1::update_focus_q32(g, p, 0.1, start_focus(zero, heat), std::vector<std::uint32_t>{5}).is_ok());
 }
 
 }  // namespace

@@ -34,8 +34,8 @@ class ReferenceStages final : public EpochStages {
   Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
                            const ProgressFn& progress) override;
   Result<Focus<Q32>> focus_update(const Graph& graph, const EpochOptions& options, double lambda2,
-                                  std::span<const Q32> start, std::span<const Q32> start_heat,
-                                  std::span<const std::uint32_t> region, const ProgressFn& progress) override;
+                                  Focus<Q32> start, std::span<const std::uint32_t> region,
+                                  const ProgressFn& progress) override;
   Result<Frame> frame(const Snapshot& snapshot, const Spectrum<Q32>& conventioned, const Anchor* anchor,
                       const std::string& anchor_name) override;
   Result<Encoding> encoding(const Snapshot& snapshot, const Graph& graph, const Focus<Q32>& focus,

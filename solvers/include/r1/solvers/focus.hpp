@@ -26,22 +26,27 @@ struct FocusOptions {
 // invariant: internal error. The Q32 phi raws sum to exactly 2^32 and are all >= 1.
 Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
                                      const ProgressFn& progress = {}, const FocusOptions& options = {});
-// The local update of an incremental epoch (R1-INC-050..053): the same T(eps) steps on the
-// particles of `region` (ascending, distinct) only, every other particle frozen at `start` (raws
-// at least 1, one entry per particle) and the region's ring held as fixed points of the walk;
+// The local update of an incremental epoch (R1-INC-050..054): the same T(eps) steps on the
+// particles of `region` (ascending, distinct) only, every other particle frozen at `start.phi`
+// (raws at least 1, one entry per particle) and the region's ring held as fixed points of the walk;
 // each step projects the region onto the raws the frozen particles leave of 2^32, so the result
 // sums to exactly 2^32, every raw at least 1, and frozen particles keep their bits. With the
-// region every particle and `start` the projected prior it is compute_focus_q32's result; with no
-// region it is `start`. Input error when the frozen raws leave fewer than one raw per region
+// region every particle and the start the projected prior it is compute_focus_q32's result; with
+// no region it is the start. Input error when the frozen raws leave fewer than one raw per region
 // particle (with no region: when they do not sum to exactly 2^32).
-// The heat term on the region is `start_heat + H_local(x) - H_local(start)` (R1-INC-052, one entry
-// per particle; unused when lambda_h = 0): with start_heat the exact heat of `start` and the
-// region every particle, the update is compute_focus_q32's. The result's heat is start_heat
+// The heat term on the region is `start.heat + H_local(x) - H_local(start)` (R1-INC-052, one
+// entry per particle; unused when lambda_h = 0): with start.heat the exact heat of the start and
+// the region every particle, the update is compute_focus_q32's. The result's heat is start.heat
 // outside the region and that term at the result inside.
-Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2,
-                                    std::span<const Q32> start, std::span<const Q32> start_heat,
+// `start.plogp`, when set, is the exact sum of phi ln phi over start.phi (raws below 1 adding
+// nothing): the result's is then updated on the region only (R1-INC-054); unset, it is summed
+// over every particle. The start's arrays are taken over, so the work is the region's.
+Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& params, double lambda2, Focus<Q32> start,
                                     std::span<const std::uint32_t> region, const ProgressFn& progress = {},
                                     const FocusOptions& options = {});
+// phi ln phi on the 2^-64 scale of fx::ExactSum: x.raw * fx::log(x).raw, 0 for a raw below 1
+// (R1-FOC-071, R1-INC-054).
+i128 phi_log_phi(Q32 x);
 // The heat term H(x) of R1-FOC-043 over the whole graph (what Focus::heat holds).
 Result<std::vector<Q32>> heat_term_q32(const Graph& g, const TriKernelParams& params, std::span<const Q32> x,
                                        const FocusOptions& options = {});

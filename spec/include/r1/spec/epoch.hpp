@@ -34,6 +34,10 @@ struct TriKernelParams {
   std::uint32_t chebyshev_degree = 8;        // heat kernel polynomial degree K
 };
 
+// The places of the cyberank order a focus keeps (R1-FOC-070): the manifest names ten, the
+// terminal five; phi holds the rest of the order.
+inline constexpr std::uint32_t kCyberankPlaces = 1024;
+
 template <class Scalar>  // fx::Q32 (canonical) or double
 struct Focus {
   std::vector<Scalar> phi;        // per particle, canonical order. Q32: raws sum to exactly 2^32, all > 0
@@ -41,7 +45,13 @@ struct Focus {
   double kappa = 0;               // contraction estimate that fixed T(eps)
   double lambda_max = 0;          // bound 2 max d on the largest eigenvalue of L = D - A_sym (Gershgorin, R1-FOC-060)
   double syntropy = 0;            // KL(phi || uniform), nats
-  std::vector<std::uint32_t> cyberank;  // particle indices by phi descending, ties by lower index
+  // The first min(n, kCyberankPlaces) particle indices by phi descending, ties by lower index
+  // (R1-FOC-070).
+  std::vector<std::uint32_t> cyberank;
+  // Q32: sum_i phi_i fx::log(phi_i), exact (units of 2^-64, R1-FOC-071), which syntropy rounds
+  // with ln n added. Carried in the manifest so that an incremental epoch updates it on its
+  // region (R1-INC-054); unset in the fp64 domain and for an epoch read without it.
+  std::optional<fx::ExactSum> plogp;
   // The heat term H(phi) of the result (R1-FOC-043 applied to phi; Q32 with lambda_h > 0, else
   // empty): what the next incremental epoch's local update starts from (spec/incremental.md
   // R1-INC-052).

@@ -39,13 +39,14 @@ class EpochStages {
   // phi* in Q32 (an fp64 focus projected onto the Q32 simplex, R1-EPO-004).
   virtual Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
                                    const ProgressFn& progress) = 0;
-  // The local focus update of an incremental epoch (spec/incremental.md R1-INC-050..053): the same
-  // steps on `region` (ascending) only, every other particle frozen at `start` (one Q32 per
-  // particle: the earlier epoch's phi, 0 for an added particle), the heat term from `start_heat`
-  // (the earlier epoch's carried heat, likewise). Q32 domain only.
+  // The local focus update of an incremental epoch (spec/incremental.md R1-INC-050..054): the same
+  // steps on `region` (ascending) only, every other particle frozen at `start.phi` (one Q32 per
+  // particle: the earlier epoch's phi, 0 for an added particle), the heat term from `start.heat`
+  // (the earlier epoch's carried heat, likewise) and the syntropy from `start.plogp`. The start's
+  // arrays are the update's to take over. Q32 domain only.
   virtual Result<Focus<Q32>> focus_update(const Graph& graph, const EpochOptions& options, double lambda2,
-                                          std::span<const Q32> start, std::span<const Q32> start_heat,
-                                          std::span<const std::uint32_t> region, const ProgressFn& progress) = 0;
+                                          Focus<Q32> start, std::span<const std::uint32_t> region,
+                                          const ProgressFn& progress) = 0;
   // Genesis frame, then the alignment to `anchor` when set; `anchor_name` names it in messages.
   virtual Result<Frame> frame(const Snapshot& snapshot, const Spectrum<Q32>& conventioned, const Anchor* anchor,
                               const std::string& anchor_name) = 0;
