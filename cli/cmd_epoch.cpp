@@ -155,11 +155,11 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   } else {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034).
     const auto t1 = std::chrono::steady_clock::now();
-    R1_ASSIGN(const Epoch prev, read_epoch(c.from));
+    R1_ASSIGN(Epoch prev, read_epoch(c.from));
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
     uo.force_full = c.full;
-    R1_ASSIGN(e, run_epoch_from(prev, anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
+    R1_ASSIGN(e, run_epoch_from(std::move(prev), anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
   }
   e.timings.insert(e.timings.begin(), {"read", read_s});
   // Reading and checking the earlier epoch (every file against its digest) is part of the update.

@@ -475,7 +475,15 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
         return Status::input((dir / "heat.q32").string() + ": byte " + std::to_string(8 * i) + ": a heat value beyond 2");
   }
   R1_ASSIGN(const std::string_view spectral, files.rows("spectral.q32", 40));
-  for (std::size_t k = 0; k < 5; ++k) e.spectrum.u[k] = read_q32_column(spectral, n, 5, k);
+  for (std::size_t k = 0; k < 5; ++k) {
+    e.spectrum.u[k] = read_q32_column(spectral, n, 5, k);
+    // Unit vectors have entries of magnitude at most 1 (a little more after incremental updates):
+    // beyond 2 they were not written by r1, and the carried image's bounds would not hold.
+    for (std::size_t i = 0; i < n; ++i)
+      if (e.spectrum.u[k][i].raw > (std::int64_t{2} << 32) || e.spectrum.u[k][i].raw < -(std::int64_t{2} << 32))
+        return Status::input((dir / "spectral.q32").string() + ": byte " + std::to_string(40 * i + 8 * k) + ": u_" +
+                             std::to_string(k + 2) + " has an entry beyond 2 (not a unit vector)");
+  }
   R1_ASSIGN(const std::string_view pos, files.rows("positions.q32", 24));
   e.frame.position = format::read_q32_triples(pos, n);
   R1_ASSIGN(const std::string_view radius, files.rows("radius.q32", 8));

@@ -183,6 +183,14 @@ TEST(EpochIo, ConsistentDigestsDoNotHideBadEdgesOrHierarchy) {
   EXPECT_NE(r.status().message().find("image.i128: byte 112: a numerator beyond 2^94"), std::string::npos) << r.status().message();
 
   e = synthetic(8);
+  e.spectrum.u[2][3] = Q32::from_int(3);  // no unit vector has an entry beyond 2
+  ASSERT_TRUE(r1::write_epoch(e, d / "d").is_ok());
+  r = r1::read_epoch(d / "d");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("spectral.q32: byte 136: u_4 has an entry beyond 2 (not a unit vector)"), std::string::npos)
+      << r.status().message();
+
+  e = synthetic(8);
   e.hierarchy.levels[0][0].hi[0] = Q32::from_int(-100);  // a box that no longer holds its particles
   ASSERT_TRUE(r1::write_epoch(e, d / "b").is_ok());
   r = r1::read_epoch(d / "b");

@@ -274,12 +274,16 @@ std::vector<double> orthogonalise(std::vector<double>& v, const std::vector<std:
 
 // z on the compact rows (zero outside N_h) minimising ||r + (L~ - theta) z|| over the Krylov
 // space of the residual restricted to N_h.
+// The basis lives on N_h: its vectors are kept on N_h's rows only (`in`, ascending), where the
+// rows outside add exact zeros to every dot product, and spread over the rows for the product.
 std::vector<double> local_correction(const Local& loc, const std::vector<double>& r, double theta, std::uint32_t krylov) {
   const std::size_t rn = loc.size();
   std::vector<double> z(rn, 0.0);
-  std::vector<double> v(rn, 0.0);
+  std::vector<std::size_t> in;
   for (std::size_t a = 0; a < rn; ++a)
-    if (loc.inner[a]) v[a] = r[a];
+    if (loc.inner[a]) in.push_back(a);
+  std::vector<double> v(in.size()), spread(rn, 0.0);
+  for (std::size_t b = 0; b < in.size(); ++b) v[b] = r[in[b]];
   std::vector<std::vector<double>> basis, qc;  // B (on N_h) and the orthonormalised C = (L - theta) B
   std::vector<std::vector<double>> rc;         // R of C = Q R, column by column
   const double v0 = std::sqrt(dot(v, v));
@@ -290,7 +294,8 @@ std::vector<double> local_correction(const Local& loc, const std::vector<double>
     const double nv = std::sqrt(dot(v, v));
     if (!(nv > 1e-12 * v0)) break;
     for (double& x : v) x = x / nv;
-    local_apply(loc, v, theta, y);
+    for (std::size_t b = 0; b < in.size(); ++b) spread[in[b]] = v[b];
+    local_apply(loc, spread, theta, y);
     std::vector<double> cj = y;
     std::vector<double> col = orthogonalise(cj, qc);
     const double nc = std::sqrt(dot(cj, cj));
@@ -301,7 +306,7 @@ std::vector<double> local_correction(const Local& loc, const std::vector<double>
     qc.push_back(std::move(cj));
     rc.push_back(std::move(col));
     // The next Krylov direction: (L - theta) v restricted to N_h.
-    for (std::size_t a = 0; a < rn; ++a) v[a] = loc.inner[a] ? y[a] : 0.0;
+    for (std::size_t b = 0; b < in.size(); ++b) v[b] = y[in[b]];
   }
   const std::size_t k = basis.size();
   if (k == 0) return z;
@@ -315,7 +320,7 @@ std::vector<double> local_correction(const Local& loc, const std::vector<double>
     d[j] = s / rc[j][j];
   }
   for (std::size_t j = 0; j < k; ++j)
-    for (std::size_t a = 0; a < rn; ++a) z[a] = z[a] + d[j] * basis[j][a];
+    for (std::size_t b = 0; b < in.size(); ++b) z[in[b]] = z[in[b]] + d[j] * basis[j][b];
   return z;
 }
 
@@ -452,7 +457,7 @@ double full_solve_bound(const Epoch& f, double s) {
   return s * std::sqrt(sum);
 }
 
-Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
+Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::string& prev_name,
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
   const auto batch_start = std::chrono::steady_clock::now();
@@ -525,28 +530,36 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   double global_s = 0, carry_s = 0;
   const int shift = spectral::scale_exponent(static_cast<std::uint32_t>(n)) / 2;  // vectors scaled by 2^shift: the operator's rounding shrinks by as much
   const std::int64_t scale = std::int64_t{1} << shift;
-  // Unit vectors have entries of magnitude at most 1 (2^32 raws; a little more after updates): an
-  // epoch whose spectral.q32 says otherwise was not written by r1.
-  for (std::size_t c = 0; c < 5; ++c)
-    for (const Q32 x : prev.spectrum.u[c])
-      if (x.raw > (std::int64_t{1} << 33) || x.raw < -(std::int64_t{1} << 33))
-        return Status::input(prev_name + "/spectral.q32: u_" + std::to_string(c + 2) + " has an entry beyond 2 (not a unit vector)");
+  // PREV's vectors are unit vectors, entries within 2 (read_epoch refuses a spectral.q32 beyond).
   const std::size_t np = prev.ids.size();
   const bool sums_carried = prev.spectrum.sums_shift == shift && prev.spectrum.image.size() == np * 5;
   // Per next particle: the stored raws (an added particle 0), the start of the update and, outside
   // N_h, the result; and the image numerators of L~_next applied to them.
+  // With the same particles in the same order, PREV's arrays are taken over (`prev` is this
+  // function's own); else gathered by particle.
   auto t_carry = std::chrono::steady_clock::now();
+  bool same_particles = batch.added == 0 && batch.dropped == 0 && np == n;
+  for (std::size_t i = 0; same_particles && i < n; ++i) same_particles = batch.prev_of[i] == static_cast<std::int64_t>(i);
   std::array<std::vector<Q32>, 5> out;
   for (std::size_t c = 0; c < 5; ++c) {
+    if (same_particles) {
+      out[c] = std::move(prev.spectrum.u[c]);
+      continue;
+    }
     out[c].resize(n);
     for (std::size_t i = 0; i < n; ++i)
       out[c][i] = batch.prev_of[i] >= 0 ? prev.spectrum.u[c][static_cast<std::size_t>(batch.prev_of[i])] : Q32{};
   }
-  std::vector<i128> image(n * 5, 0);
-  if (sums_carried)
-    for (std::size_t i = 0; i < n; ++i)
-      if (batch.prev_of[i] >= 0)
-        std::copy_n(&prev.spectrum.image[static_cast<std::size_t>(batch.prev_of[i]) * 5], 5, &image[i * 5]);
+  std::vector<i128> image;
+  if (sums_carried && same_particles) {
+    image = std::move(prev.spectrum.image);
+  } else {
+    image.assign(n * 5, 0);
+    if (sums_carried)
+      for (std::size_t i = 0; i < n; ++i)
+        if (batch.prev_of[i] >= 0)
+          std::copy_n(&prev.spectrum.image[static_cast<std::size_t>(batch.prev_of[i]) * 5], 5, &image[i * 5]);
+  }
   std::vector<std::int32_t> where(n, -1);  // per particle: its compact row in N_(h+1), or -1
   carry_s += since(t_carry);
 
@@ -716,20 +729,25 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
     // Gathered by particle like the vectors, and timed with them (`carry`).
     const auto t_start = std::chrono::steady_clock::now();
     Focus<Q32> start;
-    start.phi.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      if (batch.prev_of[i] >= 0) start.phi[i] = prev.focus.phi[static_cast<std::size_t>(batch.prev_of[i])];
-    // The carried heat term (R1-INC-052), an added particle 0; without it (PREV's lambda_h was 0,
-    // which the parameter check makes NEXT's too) none is needed.
-    if (!prev.focus.heat.empty()) {
-      start.heat.resize(n);
-      for (std::size_t i = 0; i < n; ++i)
-        if (batch.prev_of[i] >= 0) start.heat[i] = prev.focus.heat[static_cast<std::size_t>(batch.prev_of[i])];
-    }
     // The carried sum of phi ln phi (R1-INC-054) without the particles that left.
     if (prev.focus.plogp) {
       start.plogp = *prev.focus.plogp;
       for (const std::uint32_t p : batch.left) start.plogp->add_term(-phi_log_phi(prev.focus.phi[p]));
+    }
+    // The carried heat term (R1-INC-052), an added particle 0; without it (PREV's lambda_h was 0,
+    // which the parameter check makes NEXT's too) none is needed.
+    if (same_particles) {
+      start.phi = std::move(prev.focus.phi);
+      start.heat = std::move(prev.focus.heat);
+    } else {
+      start.phi.resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        if (batch.prev_of[i] >= 0) start.phi[i] = prev.focus.phi[static_cast<std::size_t>(batch.prev_of[i])];
+      if (!prev.focus.heat.empty()) {
+        start.heat.resize(n);
+        for (std::size_t i = 0; i < n; ++i)
+          if (batch.prev_of[i] >= 0) start.heat[i] = prev.focus.heat[static_cast<std::size_t>(batch.prev_of[i])];
+      }
     }
     e.timings[carry_at].seconds += since(t_start);
     clock = std::chrono::steady_clock::now();
@@ -755,9 +773,14 @@ Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const
   // no shortest paths through it yet as far as the carried values know.
   EpochOptions tail_options = options;
   if (!prev.encoding.betweenness.empty() && options.encoding.role_shapes) {
-    auto carried = std::make_shared<std::vector<double>>(n, 0.0);
-    for (std::size_t i = 0; i < n; ++i)
-      if (batch.prev_of[i] >= 0) (*carried)[i] = prev.encoding.betweenness[static_cast<std::size_t>(batch.prev_of[i])];
+    std::shared_ptr<std::vector<double>> carried;
+    if (same_particles) {
+      carried = std::make_shared<std::vector<double>>(std::move(prev.encoding.betweenness));
+    } else {
+      carried = std::make_shared<std::vector<double>>(n, 0.0);
+      for (std::size_t i = 0; i < n; ++i)
+        if (batch.prev_of[i] >= 0) (*carried)[i] = prev.encoding.betweenness[static_cast<std::size_t>(batch.prev_of[i])];
+    }
     tail_options.encoding.carried_betweenness = std::move(carried);
     info.betweenness_carried = true;
   }

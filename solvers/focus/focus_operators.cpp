@@ -174,25 +174,23 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   for (std::size_t a = 0; a < region.size(); ++a)
     if (region[a] >= g.n || (a > 0 && region[a] <= region[a - 1]))
       return Status::input("focus update: region entry " + std::to_string(a) + " out of range or out of order");
-  // where[i]: the local index of particle i, -1 outside R and its ring.
-  std::vector<std::int32_t> where(g.n, -1);
+  // The ring: R's neighbours outside R, ascending. Local indices by binary search in R and in the
+  // ring, so nothing here is sized by the graph.
+  const auto in_region = [&region](std::uint32_t j) { return std::binary_search(region.begin(), region.end(), j); };
+  std::vector<std::uint32_t> ring;
+  for (const std::uint32_t i : region)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+      if (!in_region(g.col[k])) ring.push_back(g.col[k]);
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
   local_to_global.assign(region.begin(), region.end());
-  for (std::size_t a = 0; a < region.size(); ++a) where[region[a]] = static_cast<std::int32_t>(a);
+  local_to_global.insert(local_to_global.end(), ring.begin(), ring.end());
   const auto r = static_cast<std::uint32_t>(region.size());
-  {
-    std::vector<std::uint32_t> ring;
-    for (const std::uint32_t i : region)
-      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
-        if (where[g.col[k]] == -1) {
-          where[g.col[k]] = -2;
-          ring.push_back(g.col[k]);
-        }
-    std::sort(ring.begin(), ring.end());
-    for (const std::uint32_t j : ring) {
-      where[j] = static_cast<std::int32_t>(local_to_global.size());
-      local_to_global.push_back(j);
-    }
-  }
+  const auto where = [&](std::uint32_t j) -> std::uint32_t {
+    const auto at = std::lower_bound(region.begin(), region.end(), j);
+    if (at != region.end() && *at == j) return static_cast<std::uint32_t>(at - region.begin());
+    return r + static_cast<std::uint32_t>(std::lower_bound(ring.begin(), ring.end(), j) - ring.begin());
+  };
   const auto count = static_cast<std::uint32_t>(local_to_global.size());
 
   OperatorsQ32 ops;
@@ -234,7 +232,7 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
     std::uint64_t lk = rows->row_ptr[a];
     for (std::uint64_t k = g.row_ptr[q]; k < g.row_ptr[q + 1]; ++k, ++lk) {
       const std::uint32_t j = g.col[k];
-      const auto b = static_cast<std::uint32_t>(where[j]);
+      const std::uint32_t b = where(j);
       rows->col[lk] = b;
       rows->w[lk] = g.w[k];
       // N(q, j): q's share of row j (R1-FOC-041), row j's columns ascending.
@@ -259,10 +257,12 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
     if (g.out_ptr[q] == g.out_ptr[q + 1]) ops.pattern_.dangling.push_back(a);
   }
   for (std::uint32_t a = r; a < count; ++a) ops.pattern_.in_ptr[a + 1] = ops.pattern_.in_ptr[a];
-  // The frozen dangling mass: every dangling particle outside R keeps its phi.
+  // The frozen dangling mass: every dangling particle outside R keeps its phi (all of them, less
+  // R's, exactly).
   for (std::uint32_t p = 0; p < g.n; ++p)
-    if (g.out_ptr[p] == g.out_ptr[p + 1] && (where[p] < 0 || static_cast<std::uint32_t>(where[p]) >= r))
-      ops.frozen_dangling_ += phi[p].raw;
+    if (g.out_ptr[p] == g.out_ptr[p + 1]) ops.frozen_dangling_ += phi[p].raw;
+  for (const std::uint32_t p : region)
+    if (g.out_ptr[p] == g.out_ptr[p + 1]) ops.frozen_dangling_ -= phi[p].raw;
   const std::vector<std::int64_t> prior = prior_raws(g);
   ops.prior_.assign(count, Q32{});
   for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);

@@ -69,8 +69,10 @@ double frame_scale(const Frame& f);
 // The epoch of `next` from `prev` (R1-INC-001..050): incremental when the batch allows it and the
 // certificate holds, else every stage in full with the earlier epoch's anchor. `prev_anchor` is
 // the earlier epoch's anchor file (as read); `options` must be the earlier epoch's parameters for
-// an incremental update (else: a full solve, the reason recorded).
-Result<Epoch> run_epoch_from(const Epoch& prev, const Anchor& prev_anchor, const std::string& prev_name,
+// an incremental update (else: a full solve, the reason recorded). `prev` is taken by value: a
+// caller done with it moves it in, and when the batch adds and drops no particle its per-particle
+// arrays are taken over instead of gathered (no copy of O(|P|)).
+Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::string& prev_name,
                              const Snapshot& next, const Graph& graph, const EpochOptions& options,
                              const UpdateOptions& update, EpochStages& stages, const ProgressFn& progress = {});
 
