@@ -12,6 +12,8 @@
 # UPDATE_FLAGS: the update options (default: --hops 1 --keep-local --full-norm 1000, which time the
 # local path on graphs where no certificate holds); BACKEND: the backend (default cpu); KIND: ba
 # (default) or rgg (3D geometric graphs of mean degree about 20 at every size: bounded degree).
+# LINKS=2: a second link of the chain as well (ten more added links, seed 8, from the first
+# incremental epoch), printed as `inc2` with the update stages in milliseconds.
 set -euo pipefail
 r1=${1:-build/cli/r1}
 work=${2:-$(mktemp -d)}
@@ -69,5 +71,28 @@ row(inc, "inc" if u["mode"] == "incremental" else "full*", "%d/%d" % (u["region"
 print(" %6.1f" % (walls[0] / walls[1]))
 if u["mode"] != "incremental":
     print("          (solved in full: %s)" % u["reason"])
+PY
+  [ "${LINKS:-1}" = 2 ] || continue
+  python3 - "$work/$kind-$n.epoch/particles.ids" 8 > "$work/$kind-$n.edits2" <<'PY'
+import random, sys
+ids = open(sys.argv[1], "rb").read()
+n = len(ids) // 32
+r = random.Random(int(sys.argv[2]))
+for _ in range(10):
+    a, b = r.randrange(1024, n), r.randrange(1024, n)
+    print("add\t%s\t%s\t1" % (ids[32 * a:32 * a + 32].hex(), ids[32 * b:32 * b + 32].hex()))
+PY
+  "$r1" edit "$work/$kind-$n-next.graph" "$work/$kind-$n.edits2" -o "$work/$kind-$n-next2.graph" >/dev/null
+  rm -rf "$work/$kind-$n-next2.epoch"
+  # shellcheck disable=SC2086
+  "$r1" epoch "$work/$kind-$n-next2.graph" --from "$work/$kind-$n-next.epoch" $flags -q --backend "$backend" -o "$work/$kind-$n-next2.epoch"
+  python3 - "$work/$kind-$n-next2.epoch/manifest.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+t, u = m["timings_s"], m["update"]
+ms = {k: 1000 * t.get(k, 0.0) for k in ("spectral", "certificate", "focus", "carry")}
+print("%-9d inc2    %15s   update stages (ms): spectral %.1f, certificate %.1f, focus %.1f, sum %.1f; carry %.1f" % (
+    m["snapshot"]["particles"], "%d/%d" % (u["region"], u["rows"]), ms["spectral"], ms["certificate"], ms["focus"],
+    ms["spectral"] + ms["certificate"] + ms["focus"], ms["carry"]))
 PY
 done
