@@ -196,17 +196,29 @@ TEST(Backend, NullIsWellFormedButWrong) {
 
 namespace {
 
-// R1-BKD-012..013: the Clifford primitives reached through the 13.1 trait on the host device are
-// the reference's functions, bit for bit; what the host device cannot do is an error saying so.
-TEST(HostDevice, CliffordPrimitivesThroughTheTraitAreTheReferenceBitForBit) {
+// R1-BKD-012..013, R1-BKD-060..063: the Clifford primitives reached through the 13.1 trait are the
+// reference's functions bit for bit, on every device: host memory, and Vulkan (lavapipe in CI).
+// What a device cannot do is an error saying so. A device that does not exist here is skipped
+// with its reason, unless R1_REQUIRE_VULKAN is set (make test sets it on the main build tree).
+class EveryDevice : public testing::TestWithParam<std::string> {};
+
+std::unique_ptr<r1::backends::Device> device_or_skip_reason(const std::string& name, std::string& reason) {
+  if (name == "host") return r1::backends::make_host_device();
+  auto dev = r1::backends::make_vulkan_device();
+  if (dev.is_ok()) return std::move(dev).value();
+  reason = dev.status().message();
+  return nullptr;
+}
+
+TEST_P(EveryDevice, CliffordPrimitivesThroughTheTraitAreTheReferenceBitForBit) {
   using namespace r1;
-  auto dev = backends::make_host_device();
-  const std::uint32_t n = 5, d = 8;
-  clifford::Rows h = clifford::zeros(n, d), c = clifford::zeros(n, d);
-  for (std::uint32_t i = 0; i < n * d; ++i) {
-    h.v[i] = rng::uniform_double(7, i, 0) - 0.5;
-    c.v[i] = rng::uniform_double(7, i, 1) - 0.5;
+  std::string reason;
+  auto dev = device_or_skip_reason(GetParam(), reason);
+  if (!dev) {
+    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
+    GTEST_SKIP() << reason;
   }
+  RecordProperty("device", dev->describe());
   auto upload = [&](const clifford::Rows& r) {
     const auto bytes = backends::tensor_bytes(r.n, r.d, r.v);
     auto id = dev->buffer_create(bytes.size(), backends::BufferUsage::kTensor);
@@ -226,37 +238,93 @@ TEST(HostDevice, CliffordPrimitivesThroughTheTraitAreTheReferenceBitForBit) {
     EXPECT_TRUE(t.is_ok());
     return t->second;
   };
-  const backends::BufferId hb = upload(h), cb = upload(c);
-  const std::vector<std::int32_t> shifts{1, 2, 4};
-  auto rolled = dev->roll(hb, 3, 1);
-  ASSERT_TRUE(rolled.is_ok());
-  EXPECT_EQ(download(*rolled), clifford::roll(h, 3, 1)->v);
-  auto inner = dev->shifted_inner(hb, cb, shifts);
-  ASSERT_TRUE(inner.is_ok());
-  EXPECT_EQ(download(*inner), clifford::shifted_inner(h, c, shifts)->v);
-  auto wedge = dev->shifted_wedge(hb, hb, shifts);
-  ASSERT_TRUE(wedge.is_ok());
-  for (double x : download(*wedge)) ASSERT_EQ(x, 0.0);  // Wedge_s(X, X) = 0 through the trait too
-  auto params = clifford::init_block_params(d, shifts.size(), 11);
-  ASSERT_TRUE(params.is_ok());
-  std::vector<double> gate;
-  for (const auto* part : {&params->w.v, &params->bias, &params->wg.v, &params->bg, &params->gamma})
-    gate.insert(gate.end(), part->begin(), part->end());
-  std::vector<std::uint8_t> gate_bytes(gate.size() * 8);
-  std::memcpy(gate_bytes.data(), gate.data(), gate_bytes.size());
-  auto gb = dev->buffer_create(gate_bytes.size(), backends::BufferUsage::kStorage);
-  ASSERT_TRUE(gb.is_ok());
-  ASSERT_TRUE(dev->buffer_write(*gb, gate_bytes, 0).is_ok());
-  auto block = dev->clifford_block(hb, cb, shifts, *gb);
-  ASSERT_TRUE(block.is_ok()) << block.status().message();
-  EXPECT_EQ(download(*block), clifford::clifford_block(h, c, shifts, *params)->v);
-
-  auto shader = dev->shader_compile("void main() {}", backends::ShaderStage::kCompute);
-  ASSERT_FALSE(shader.is_ok());
-  EXPECT_NE(shader.status().message().find("shader_compile is not available"), std::string::npos);
-  EXPECT_FALSE(dev->buffer_write(hb, std::vector<std::uint8_t>(4), 8 + n * d * 8 - 2).is_ok());
+  // A small tensor and one of many workgroups; values of both signs and magnitudes up to 40, so
+  // that det_exp meets large and small arguments.
+  for (const auto& [n, d, scale] : {std::tuple{5u, 8u, 1.0}, std::tuple{300u, 16u, 80.0}}) {
+    clifford::Rows h = clifford::zeros(n, d), c = clifford::zeros(n, d);
+    for (std::uint32_t i = 0; i < n * d; ++i) {
+      h.v[i] = (rng::uniform_double(7, i, 0) - 0.5) * scale;
+      c.v[i] = (rng::uniform_double(7, i, 1) - 0.5) * scale;
+    }
+    const backends::BufferId hb = upload(h), cb = upload(c);
+    const std::vector<std::int32_t> shifts{1, 2, 4, -3};
+    for (const std::uint32_t axis : {0u, 1u}) {
+      auto rolled = dev->roll(hb, -7, axis);
+      ASSERT_TRUE(rolled.is_ok()) << rolled.status().message();
+      EXPECT_EQ(download(*rolled), clifford::roll(h, -7, axis)->v) << "axis " << axis << ", n " << n;
+    }
+    auto inner = dev->shifted_inner(hb, cb, shifts);
+    ASSERT_TRUE(inner.is_ok()) << inner.status().message();
+    EXPECT_EQ(download(*inner), clifford::shifted_inner(h, c, shifts)->v) << "n " << n;
+    auto wedge = dev->shifted_wedge(hb, cb, shifts);
+    ASSERT_TRUE(wedge.is_ok());
+    EXPECT_EQ(download(*wedge), clifford::shifted_wedge(h, c, shifts)->v) << "n " << n;
+    auto self = dev->shifted_wedge(hb, hb, shifts);
+    ASSERT_TRUE(self.is_ok());
+    for (double x : download(*self)) ASSERT_EQ(x, 0.0);  // Wedge_s(X, X) = 0 through the trait too
+    auto params = clifford::init_block_params(d, shifts.size(), 11);
+    ASSERT_TRUE(params.is_ok());
+    params->gamma.assign(d, 0.25);  // a gamma that lets the block's terms show in the result
+    for (std::uint32_t o = 0; o < d; ++o) {  // and biases that are not zero
+      params->bias[o] = 0.01 * o - 0.03;
+      params->bg[o] = 0.5 - 0.02 * o;
+    }
+    std::vector<double> gate;
+    for (const auto* part : {&params->w.v, &params->bias, &params->wg.v, &params->bg, &params->gamma})
+      gate.insert(gate.end(), part->begin(), part->end());
+    std::vector<std::uint8_t> gate_bytes(gate.size() * 8);
+    std::memcpy(gate_bytes.data(), gate.data(), gate_bytes.size());
+    auto gb = dev->buffer_create(gate_bytes.size(), backends::BufferUsage::kStorage);
+    ASSERT_TRUE(gb.is_ok());
+    ASSERT_TRUE(dev->buffer_write(*gb, gate_bytes, 0).is_ok());
+    auto block = dev->clifford_block(hb, cb, shifts, *gb);
+    ASSERT_TRUE(block.is_ok()) << block.status().message();
+    EXPECT_EQ(download(*block), clifford::clifford_block(h, c, shifts, *params)->v) << "n " << n;
+    // A gate buffer of the wrong size is refused.
+    auto short_gate = dev->buffer_create(gate_bytes.size() - 8, backends::BufferUsage::kStorage);
+    ASSERT_TRUE(short_gate.is_ok());
+    EXPECT_FALSE(dev->clifford_block(hb, cb, shifts, *short_gate).is_ok());
+    EXPECT_FALSE(dev->buffer_write(hb, std::vector<std::uint8_t>(4), 8 + n * d * 8 - 2).is_ok());
+  }
   EXPECT_FALSE(dev->roll(999, 1, 1).is_ok());
+
+  const std::string doubler = R"(#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer X { int64_t x[]; };
+layout(std430, binding = 3) buffer Y { int64_t y[]; };
+void main() { uint i = gl_GlobalInvocationID.x; if (i < 100u) y[i] = 2l * x[i] - 1l; }
+)";
+  auto shader = dev->shader_compile(doubler, backends::ShaderStage::kCompute);
+  if (GetParam() == "host") {
+    ASSERT_FALSE(shader.is_ok());
+    EXPECT_NE(shader.status().message().find("shader_compile is not available"), std::string::npos);
+    return;
+  }
+  // A device with compute: the caller's shader runs on its buffers.
+  ASSERT_TRUE(shader.is_ok()) << shader.status().message();
+  std::vector<std::int64_t> x(100);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = (std::int64_t{1} << 40) * static_cast<std::int64_t>(i) - 12345;
+  auto xb = dev->buffer_create(800, backends::BufferUsage::kStorage), yb = dev->buffer_create(800, backends::BufferUsage::kStorage);
+  ASSERT_TRUE(xb.is_ok() && yb.is_ok());
+  ASSERT_TRUE(dev->buffer_write(*xb, std::span(reinterpret_cast<const std::uint8_t*>(x.data()), 800), 0).is_ok());
+  const backends::Binding bindings[] = {{0, *xb}, {3, *yb}};
+  ASSERT_TRUE(dev->compute_dispatch(*shader, bindings, {2, 1, 1}).is_ok());
+  auto y = dev->buffer_read(*yb, 0, 800);
+  ASSERT_TRUE(y.is_ok());
+  std::vector<std::int64_t> got(100);
+  std::memcpy(got.data(), y->data(), 800);
+  for (std::size_t i = 0; i < x.size(); ++i) ASSERT_EQ(got[i], 2 * x[i] - 1) << i;
+  auto bad = dev->shader_compile("void main() { nonsense; }", backends::ShaderStage::kCompute);
+  ASSERT_FALSE(bad.is_ok());
+  EXPECT_NE(bad.status().message().find("does not compile"), std::string::npos) << bad.status().message();
+  auto vertex = dev->shader_compile(doubler, backends::ShaderStage::kVertex);
+  ASSERT_FALSE(vertex.is_ok());
+  EXPECT_NE(vertex.status().message().find("not available yet"), std::string::npos);
 }
+
+INSTANTIATE_TEST_SUITE_P(Devices, EveryDevice, testing::Values("host", "vulkan"),
+                         [](const testing::TestParamInfo<std::string>& p) { return p.param; });
 
 }  // namespace
 

@@ -7,6 +7,7 @@
 
 #include "backend_option.hpp"
 #include "commands.hpp"
+#include "r1/backends/device.hpp"
 #include "r1/backends/registry.hpp"
 #include "r1/conformance/conform.hpp"
 #include "r1/reference/atomic_file.hpp"
@@ -43,6 +44,10 @@ Status run_conform(const ConformCliOptions& o) {
   if (o.list) {
     for (const auto& b : backends::registered_backends())
       std::printf("%-18s %s%s\n", b.name.c_str(), b.summary.c_str(), b.expected_conformant ? "" : " [fails by design]");
+    // The devices of the 13.1 trait (R1-BKD-012, R1-BKD-060): which one is here, or why not.
+    std::printf("\ndevices\n%-18s %s\n", "host", backends::make_host_device()->describe().c_str());
+    const auto vulkan = backends::make_vulkan_device();
+    std::printf("%-18s %s\n", "vulkan", vulkan.is_ok() ? (*vulkan)->describe().c_str() : vulkan.status().message().c_str());
     return Status::ok();
   }
   R1_ASSIGN(const ChosenBackend chosen, o.backend.make());

@@ -17,7 +17,7 @@ import tempfile
 
 # Where headers are found, as the build's include directories give them (relative to ROOT).
 INCLUDE_ROOTS = ["fixedpoint/include", "spec/include", "format/include", "solvers/include", "reference/include",
-                 "accel/cpu/include", "backends/include",
+                 "accel/cpu/include", "accel/vulkan/include", "backends/include",
                  "reference"]
 
 # Adapters that wrap an implementation may include it (each adapter <- its implementation).
@@ -27,6 +27,8 @@ ADAPTER_IMPLEMENTATION = {
     # the cpu backend: accel/cpu's kernels in the solver the reference's stage list runs (R1-BKD-043)
     "backends/adapters/cpu_backend.cpp": {"reference", "accel", "solvers"},
     "backends/adapters/host_device.cpp": {"reference"},  # the trait over host memory: the reference's Clifford
+    # the trait on accel/vulkan's context, det_exp's constants from the reference's Clifford
+    "backends/adapters/vulkan_device.cpp": {"reference", "accel"},
 }
 
 # Layer of a file by its path, first match wins.

@@ -10,6 +10,8 @@ set -euo pipefail
 #   images: OpenImageIO (+ the tools and OpenCV core its CMake config asks for), OpenColorIO,
 #     DejaVu fonts for the T1 labels OpenImageIO draws
 #   tests/bench: GoogleTest/GoogleMock, RapidCheck, Google Benchmark, SciPy for peer comparisons
+#   vulkan: the loader and headers, shaderc (GLSL to SPIR-V at run time, the 13.1 trait's
+#     shader_compile), Mesa's lavapipe (a Vulkan device on the CPU, so CI runs the Vulkan tests)
 PACKAGES=(
   g++ cmake ninja-build make pkg-config ccache
   clang-14 libclang-rt-14-dev lld
@@ -18,6 +20,7 @@ PACKAGES=(
   libopenimageio-dev openimageio-tools libopencv-core-dev libopencolorio-dev fonts-dejavu-core
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
   python3 python3-numpy python3-scipy
+  libvulkan-dev libshaderc-dev mesa-vulkan-drivers
 )
 
 missing=()

@@ -131,4 +131,10 @@ Result<std::pair<std::array<std::uint32_t, 2>, std::vector<double>>> parse_tenso
 
 std::unique_ptr<Device> make_host_device() { return std::make_unique<HostDevice>(); }
 
+#ifndef R1_BACKEND_VULKAN
+Result<std::unique_ptr<Device>> make_vulkan_device() {
+  return Status::input("vulkan device: r1 was built without Vulkan (R1_BACKEND_VULKAN off: no Vulkan loader or shaderc when it was configured)");
+}
+#endif
+
 }  // namespace r1::backends

@@ -16,8 +16,7 @@ namespace {
 
 // ---- deterministic exp ----------------------------------------------------------------------
 
-// log2(e) rounded to double; it only picks k = round(x / ln 2), so its last bit does not matter.
-constexpr double kLog2e = 0x1.71547652b82fep0;
+using detail::kLog2e;
 // e^710 > DBL_MAX (e^709.78...): every larger argument overflows, and clamping before the
 // reduction keeps k inside int range for any finite or infinite x.
 constexpr double kExpOverflow = 710.0;
@@ -112,6 +111,8 @@ Status check_vector(std::span<const double> b, std::uint32_t d, const char* what
 }
 
 }  // namespace
+
+std::array<double, detail::kExpDegree + 1> detail::exp_taylor() { return kTaylor; }
 
 Rows zeros(std::uint32_t n, std::uint32_t d) { return Rows{n, d, std::vector<double>(std::size_t{n} * d, 0.0)}; }
 

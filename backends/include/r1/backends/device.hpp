@@ -6,7 +6,9 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -63,6 +65,8 @@ class Device {
   // determinism contract
   virtual bool deterministic_mode() const = 0;
   virtual Domain numeric_domain() const = 0;
+  // The device in words (name and driver), for listings and test reports.
+  virtual std::string describe() const { return "host memory"; }
 };
 
 // The host device (R1-BKD-013): buffers in host memory and the Clifford primitives of the
@@ -70,5 +74,10 @@ class Device {
 // are errors saying so). What the reference adapter's trait would be, and the oracle a GPU
 // device's Clifford kernels are tested against.
 std::unique_ptr<Device> make_host_device();
+
+// The Vulkan device (R1-BKD-060..063): buffers and compute on the first usable Vulkan 1.3 device
+// (R1_VULKAN_DEVICE=N picks another), the Clifford primitives as compute shaders. Input error
+// saying why when r1 was built without Vulkan or no usable device exists.
+Result<std::unique_ptr<Device>> make_vulkan_device();
 
 }  // namespace r1::backends

@@ -1,6 +1,7 @@
 // The Clifford primitives of the 13.1 backend trait in fp64 (roll, shifted_inner, shifted_wedge, clifford_block, graph context), R1-RND-100..107.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -41,6 +42,11 @@ inline constexpr double kLn2Hi = 0x1.62e42feep-1;
 inline constexpr double kLn2Lo = 0x1.a39ef35793c76p-33;
 // Why 13: the Taylor remainder of e^r at |r| = ln2/2 is r^14 / 14! < 5e-18, under 1/20 ulp.
 inline constexpr int kExpDegree = 13;
+// log2(e) rounded to double; it only picks k = round(x / ln 2), so its last bit does not matter.
+inline constexpr double kLog2e = 0x1.71547652b82fep0;
+// The Taylor coefficients 1/n!, n = 0..kExpDegree, that det_exp evaluates (for devices that run
+// the same evaluation, R1-BKD-062).
+std::array<double, kExpDegree + 1> exp_taylor();
 }  // namespace detail
 // SiLU(x) = x / (1 + det_exp(-x)) and sigmoid(x) = 1 / (1 + det_exp(-x)).
 double silu(double x);

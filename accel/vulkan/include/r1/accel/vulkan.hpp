@@ -1,0 +1,95 @@
+// A Vulkan 1.3 compute context (spec/backends.md R1-BKD-060..063): one physical device, one
+// compute queue, storage buffers in host-visible coherent memory, GLSL compiled to SPIR-V at run
+// time with shaderc, and synchronous dispatches. What the vulkan device of the 13.1 trait
+// (backends/adapters/vulkan_device.cpp) is built on. Includes spec/ only.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "r1/spec/status.hpp"
+
+namespace r1::vk {
+
+struct DeviceInfo {
+  std::string name;         // VkPhysicalDeviceProperties::deviceName, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string driver;       // VkPhysicalDeviceDriverProperties::driverName, e.g. "llvmpipe"
+  std::uint32_t api = 0;    // VkPhysicalDeviceProperties::apiVersion
+  bool cpu = false;         // VK_PHYSICAL_DEVICE_TYPE_CPU (lavapipe)
+};
+
+struct Slot {
+  std::uint32_t binding = 0;  // layout(set = 0, binding = N) in the shader, N < kSlots
+  std::uint32_t buffer = 0;
+};
+
+class Context {
+ public:
+  // Storage-buffer bindings every compute pipeline's layout has (set 0, bindings 0..kSlots-1), and
+  // the push-constant bytes it may read.
+  static constexpr std::uint32_t kSlots = 8;
+  static constexpr std::uint32_t kPushBytes = 128;
+
+  // The first device with a compute queue, 64-bit floats and integers in shaders and Vulkan 1.3
+  // (discrete GPUs before integrated, virtual and CPU ones; R1_VULKAN_DEVICE=N picks the N-th).
+  // Input error saying why when there is none (no loader, no driver, no such device).
+  static Result<std::unique_ptr<Context>> create();
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  const DeviceInfo& info() const;
+
+  Result<std::uint32_t> buffer_create(std::size_t bytes);
+  std::size_t buffer_size(std::uint32_t id) const;  // 0 for no such buffer
+  Status buffer_write(std::uint32_t id, std::span<const std::uint8_t> data, std::size_t offset);
+  Result<std::vector<std::uint8_t>> buffer_read(std::uint32_t id, std::size_t offset, std::size_t size);
+
+  // GLSL 4.60 compute source to a pipeline; `name` names it in compiler messages.
+  Result<std::uint32_t> compute_compile(std::string_view glsl, std::string_view name);
+  // One dispatch of `groups` workgroups, waited for; `push` at most kPushBytes.
+  Status dispatch(std::uint32_t pipeline, std::span<const Slot> slots, std::array<std::uint32_t, 3> groups,
+                  std::span<const std::uint8_t> push = {});
+
+ private:
+  struct State;
+  explicit Context(std::unique_ptr<State> s);
+  std::unique_ptr<State> s_;
+};
+
+// det_exp's constants (the reference's: spec/render.md R1-RND-101): log2 e, ln 2 split high and
+// low, and the Taylor coefficients 1/n!, n = 0..13.
+struct ExpConstants {
+  double log2e = 0, ln2_hi = 0, ln2_lo = 0;
+  std::vector<double> taylor;
+};
+
+// The Clifford primitives of the 13.1 trait as compute shaders (R1-BKD-062) on tensor
+// buffers of the trait's format (u32 n, u32 d, then n x d doubles, R1-BKD-013): the reference's
+// evaluation order in fp64 with every expression `precise` (no contraction into fma). Each returns
+// a new buffer; shapes are checked with the reference's messages.
+class CliffordKernels {
+ public:
+  static Result<CliffordKernels> build(Context& ctx, const ExpConstants& constants);
+  Result<std::uint32_t> roll(std::uint32_t tensor, std::int32_t shift, std::uint32_t axis);
+  Result<std::uint32_t> shifted_inner(std::uint32_t h, std::uint32_t c, std::span<const std::int32_t> shifts);
+  Result<std::uint32_t> shifted_wedge(std::uint32_t h, std::uint32_t c, std::span<const std::int32_t> shifts);
+  // The block of R1-RND-105: `gate` holds w, bias, wg, bg and gamma as doubles, in that order.
+  Result<std::uint32_t> block(std::uint32_t h, std::uint32_t c, std::span<const std::int32_t> shifts, std::uint32_t gate);
+
+ private:
+  struct Shape;
+  Result<Shape> shape_of(std::uint32_t tensor, const char* what);
+  Result<std::uint32_t> tensor(std::uint32_t n, std::uint32_t d);
+  Result<std::uint32_t> shifted(std::uint32_t h, std::uint32_t c, std::span<const std::int32_t> shifts, bool inner,
+                                std::uint32_t width_factor);
+  Context* ctx_ = nullptr;
+  std::uint32_t constants_ = 0, roll_ = 0, shifted_ = 0, linear_ = 0, residual_ = 0;
+};
+
+}  // namespace r1::vk
