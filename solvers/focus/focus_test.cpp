@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "apportion.hpp"
 #include "focus_operators.hpp"
 #include "heat_kernel.hpp"
 #include "r1/reference/generate.hpp"
@@ -220,6 +221,34 @@ RC_GTEST_PROP(FocusApportion, LargestRemainderAgainstRationals, ()) {
   }
   RC_ASSERT(sum == static_cast<std::int64_t>(total));
   if (min_up >= 0) RC_ASSERT(min_up >= max_down);
+}
+
+// From 4096 weights apportion_into takes its fast path (double estimates made exact, a bucketed
+// threshold): the shares are apportion_into_plain's, every one, with heavy ties (few distinct
+// weights, as integer degrees give), spread weights, zeros, and totals from tiny to 2^40 and
+// beyond (where the plain path runs).
+RC_GTEST_PROP(FocusApportion, FastPathIsThePlainOneShareForShare, ()) {
+  const auto n = *rc::gen::inRange<std::size_t>(4096, 12000);
+  const int mode = *rc::gen::inRange(0, 4);
+  const std::uint64_t cap = std::uint64_t{1} << *rc::gen::inRange(1, 51);  // sums below 2^64 mostly
+  std::vector<std::uint64_t> w(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t r = *rc::gen::arbitrary<std::uint64_t>();
+    if (mode == 0) w[i] = (r % 7) << 32;                 // few distinct values: degrees of unit links
+    else if (mode == 1) w[i] = r % cap;                   // spread
+    else if (mode == 2) w[i] = r % 3 == 0 ? 0 : r % cap;  // a third zero
+    else w[i] = r;                                        // sums beyond 2^64: the plain path
+  }
+  const int t = *rc::gen::inRange(0, 4);
+  const std::uint64_t total = t == 0 ? std::uint64_t{1} << 32
+                              : t == 1 ? *rc::gen::inRange<std::uint64_t>(0, 100000)
+                              : t == 2 ? *rc::gen::inRange<std::uint64_t>(0, std::uint64_t{1} << 40)
+                                       : *rc::gen::arbitrary<std::uint64_t>() >> 1;
+  std::vector<std::int64_t> fast(n), plain(n);
+  r1::focus::ApportionScratch a, b;
+  r1::focus::apportion_into(total, w, fast, a);
+  r1::focus::apportion_into_plain(total, w, plain, b);
+  RC_ASSERT(fast == plain);
 }
 
 RC_GTEST_PROP(FocusProjection, ExactSumPositiveIdempotent, ()) {

@@ -12,7 +12,7 @@
 namespace r1 {
 namespace focus {
 
-void apportion_into(std::uint64_t total, std::span<const std::uint64_t> w, std::span<std::int64_t> out,
+void apportion_into_plain(std::uint64_t total, std::span<const std::uint64_t> w, std::span<std::int64_t> out,
                     ApportionScratch& scratch) {
   const std::size_t n = w.size();
   if (n == 0 || out.size() != n) throw std::invalid_argument("apportion: no weights or size mismatch");
@@ -47,6 +47,89 @@ void apportion_into(std::uint64_t total, std::span<const std::uint64_t> w, std::
   const auto cut = order.begin() + static_cast<std::ptrdiff_t>(left);
   std::nth_element(order.begin(), cut, order.end(), before);
   for (auto it = order.begin(); it != cut; ++it) ++out[*it];
+}
+
+namespace {
+
+// The same shares for many weights whose sum is below 2^63 and a total of at most 2^40 (every
+// prior and every projection, R1-FOC-011, R1-FOC-051): each quotient from a double estimate,
+// made exact by its remainder (the estimate is within one of the quotient; the loops make it
+// exact whatever it is), and the `left` largest remainders found through 2^16 buckets that a
+// monotone map of the remainder picks: the items above the threshold's bucket all get a unit,
+// and only that bucket is ordered. The order is the strict (remainder desc, index asc) of
+// apportion_into_plain, so the chosen set, and every share, is the same.
+constexpr std::size_t kFastFrom = 4096;
+constexpr std::uint32_t kBuckets = 1u << 16;
+
+bool fast_apportion(std::uint64_t total, std::span<const std::uint64_t> w, std::span<std::int64_t> out, u128 sum,
+                    ApportionScratch& scratch) {
+  const std::size_t n = w.size();
+  // Remainders below 2^63: one signed conversion each.
+  if (n < kFastFrom || sum == 0 || sum >= (u128{1} << 63) || total > (std::uint64_t{1} << 40)) return false;
+  const auto s = static_cast<std::uint64_t>(sum);
+  const double ratio = static_cast<double>(total) / static_cast<double>(s);
+  const double scale = static_cast<double>(kBuckets) / static_cast<double>(s);
+  auto& rem = scratch.rem64;
+  auto& bucket = scratch.bucket_of;
+  auto& count = scratch.buckets;
+  rem.resize(n);
+  bucket.resize(n);
+  count.assign(kBuckets, 0);
+  std::uint64_t given = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const u128 p = static_cast<u128>(total) * w[i];
+    std::uint64_t q = static_cast<std::uint64_t>(static_cast<double>(w[i]) * ratio);
+    if (q > total) q = total;
+    i128 r = static_cast<i128>(p) - static_cast<i128>(static_cast<u128>(q) * s);
+    while (r < 0) {
+      --q;
+      r += s;
+    }
+    while (r >= static_cast<i128>(s)) {
+      ++q;
+      r -= s;
+    }
+    rem[i] = static_cast<std::uint64_t>(r);
+    out[i] = static_cast<std::int64_t>(q);
+    given += q;
+    // A monotone map of the remainder (r < s < 2^63): rounding, scaling by a positive constant,
+    // truncation and the clamp all keep the order, ties included.
+    const auto k = std::min<std::uint32_t>(static_cast<std::uint32_t>(static_cast<double>(static_cast<std::int64_t>(r)) * scale),
+                                           kBuckets - 1);
+    bucket[i] = static_cast<std::uint16_t>(k);
+    ++count[k];
+  }
+  std::uint64_t left = total - given;
+  if (left == 0) return true;
+  std::uint32_t b = kBuckets - 1;
+  while (count[b] < left) {  // more than `left` remainders are non-zero, so this stops
+    left -= count[b];
+    --b;
+  }
+  auto& candidates = scratch.order;
+  candidates.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t k = bucket[i];
+    if (k > b) ++out[i];
+    else if (k == b) candidates.push_back(static_cast<std::uint32_t>(i));
+  }
+  const auto before = [&rem](std::uint32_t x, std::uint32_t y) { return rem[x] != rem[y] ? rem[x] > rem[y] : x < y; };
+  const auto cut = candidates.begin() + static_cast<std::ptrdiff_t>(left);
+  std::nth_element(candidates.begin(), cut, candidates.end(), before);
+  for (auto it = candidates.begin(); it != cut; ++it) ++out[*it];
+  return true;
+}
+
+}  // namespace
+
+void apportion_into(std::uint64_t total, std::span<const std::uint64_t> w, std::span<std::int64_t> out,
+                    ApportionScratch& scratch) {
+  if (w.size() >= kFastFrom && out.size() == w.size() && total < (std::uint64_t{1} << 63)) {
+    u128 sum = 0;
+    for (const std::uint64_t x : w) sum += x;
+    if (fast_apportion(total, w, out, sum, scratch)) return;
+  }
+  apportion_into_plain(total, w, out, scratch);
 }
 
 }  // namespace focus

@@ -92,4 +92,25 @@ class CliffordKernels {
   std::uint32_t constants_ = 0, roll_ = 0, shifted_ = 0, linear_ = 0, residual_ = 0;
 };
 
+// The exact Q32 sparse product (R1-BKD-064): y_i = RNE(sum_k val_k x_(col_k) / 2^32), the row sum
+// exact in 128 bits (two 64-bit limbs in the shader) and rounded once, ties to even, as the host's
+// i128 arithmetic and fx::detail::rne_shift give it: the walk and operator products of the focus
+// and spectral stages. With `empty_rows_identity` an empty row returns x_i (an isolated
+// particle's walk, R1-FOC-041). The matrix is uploaded once; each apply uploads x. Sums must stay
+// within 128 bits, as on the host; a row that rounds outside int64 is an internal error naming it.
+class ExactSpmv {
+ public:
+  static Result<ExactSpmv> build(Context& ctx, std::span<const std::uint64_t> row_ptr, std::span<const std::uint32_t> col,
+                                 std::span<const std::int64_t> val, bool empty_rows_identity);
+  Result<std::vector<std::int64_t>> apply(std::span<const std::int64_t> x);
+  std::uint32_t rows() const { return rows_; }
+  std::uint32_t columns() const { return columns_; }
+
+ private:
+  Context* ctx_ = nullptr;
+  std::uint32_t rows_ = 0, columns_ = 0;
+  bool identity_ = false;
+  std::uint32_t pipeline_ = 0, row_ptr_ = 0, col_ = 0, val_ = 0, x_ = 0, y_ = 0, flag_ = 0;
+};
+
 }  // namespace r1::vk
