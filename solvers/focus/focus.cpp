@@ -89,14 +89,15 @@ std::vector<std::uint32_t> rank_by(std::span<const Q32> phi) {
   return order;
 }
 
+// sum_i phi_log_phi(phi_i), exact: the terms on the row threads, the sum in one order.
 fx::ExactSum plogp_of(std::span<const Q32> phi, bool parallel) {
   const auto n = static_cast<std::uint32_t>(phi.size());
-  std::vector<Q32> logs(n);
+  std::vector<i128> terms(n);
   focus::for_rows(parallel, n, [&](std::uint32_t b, std::uint32_t e) {
-    for (std::uint32_t i = b; i < e; ++i) logs[i] = phi[i].raw < 1 ? Q32{} : fx::log(phi[i]);
+    for (std::uint32_t i = b; i < e; ++i) terms[i] = phi_log_phi(phi[i]);
   });
   fx::ExactSum s;
-  for (std::uint32_t i = 0; i < n; ++i) s.add_product(phi[i], logs[i]);
+  for (const i128 t : terms) s.add_term(t);
   return s;
 }
 
