@@ -4,6 +4,9 @@
 // backend needs a written reason, here, in skip_bit_for_bit().
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <map>
 #include <string>
 
@@ -28,6 +31,31 @@ const std::map<std::string, std::string>& skip_bit_for_bit() {
       {"selftest-hue", "built to turn every pixel's hue (R1-BKD-022)"},
   };
   return reasons;
+}
+
+// Backends whose frame may differ from the reference's in the last bits, each with its bound on
+// any channel of any pixel (far inside R-1.0's Delta E 2) and its reason. Their epochs are still
+// held to the reference's bytes.
+struct FrameBound {
+  float max_abs = 0;
+  std::string reason;
+};
+const std::map<std::string, FrameBound>& frame_bounds() {
+  static const std::map<std::string, FrameBound> bounds = {
+      {"vulkan", {1e-5f, "a GPU driver's fp64 division and square root need not round correctly, and the torus's cubic "
+                         "starts from fp32 estimates on the device (R1-BKD-066); lavapipe gives the same bits"}},
+  };
+  return bounds;
+}
+
+// The backend, or a skip with the reason when it needs a device this machine lacks (a Vulkan
+// backend without a Vulkan device), unless R1_REQUIRE_VULKAN is set.
+std::unique_ptr<backends::Backend> backend_or_skip(const std::string& name, std::string& skip) {
+  auto b = backends::make_backend(name);
+  if (b.is_ok()) return std::move(b).value();
+  if (name == "vulkan" && std::getenv("R1_REQUIRE_VULKAN") == nullptr) skip = b.status().message();
+  else ADD_FAILURE() << b.status().message();
+  return nullptr;
 }
 
 std::vector<std::string> registered_names() {
@@ -70,12 +98,14 @@ class EveryBackend : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(EveryBackend, RunsEveryStageOnceAndReturnsAWellFormedEpochAndFrame) {
   const Input in = ba(120);
-  auto b = backends::make_backend(GetParam());
-  ASSERT_TRUE(b.is_ok()) << b.status().message();
-  EXPECT_EQ((*b)->name(), GetParam());
-  auto e = backends::run_epoch(**b, in.snapshot, in.graph, {});
+  std::string skip;
+  auto b = backend_or_skip(GetParam(), skip);
+  if (!skip.empty()) GTEST_SKIP() << skip;
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->name(), GetParam());
+  auto e = backends::run_epoch(*b, in.snapshot, in.graph, {});
   ASSERT_TRUE(e.is_ok()) << e.status().message();
-  const auto& calls = (*b)->calls();
+  const auto& calls = b->calls();
   EXPECT_EQ(calls[Stage::kSpectral], 1u);
   EXPECT_EQ(calls[Stage::kFocus], 1u);
   EXPECT_EQ(calls[Stage::kFrame], 1u);
@@ -87,7 +117,7 @@ TEST_P(EveryBackend, RunsEveryStageOnceAndReturnsAWellFormedEpochAndFrame) {
   EXPECT_EQ(sum, std::int64_t{1} << 32);
   EXPECT_TRUE(epoch_files(*e).is_ok());
   const render::View v = small_view();
-  auto img = (*b)->render(*e, v, {}, nullptr, {});
+  auto img = b->render(*e, v, {}, nullptr, {});
   ASSERT_TRUE(img.is_ok()) << img.status().message();
   EXPECT_EQ(img->width, v.width);
   EXPECT_EQ(img->height, v.height);
@@ -100,18 +130,28 @@ TEST_P(EveryBackend, AConformantBackendIsTheReferenceBitForBit) {
   const Input in = ba(200);
   auto want = run_epoch(in.snapshot, in.graph, {});
   ASSERT_TRUE(want.is_ok());
-  auto b = backends::make_backend(GetParam());
-  ASSERT_TRUE(b.is_ok());
-  auto got = backends::run_epoch(**b, in.snapshot, in.graph, {});
+  std::string no_device;
+  auto b = backend_or_skip(GetParam(), no_device);
+  if (!no_device.empty()) GTEST_SKIP() << no_device;
+  ASSERT_TRUE(b);
+  auto got = backends::run_epoch(*b, in.snapshot, in.graph, {});
   ASSERT_TRUE(got.is_ok()) << got.status().message();
   EXPECT_EQ(*epoch_files(*got), *epoch_files(*want));
   auto reference = backends::make_backend("reference");
   ASSERT_TRUE(reference.is_ok());
   const render::View v = small_view();
-  auto a = (*b)->render(*got, v, {}, nullptr, {});
+  auto a = b->render(*got, v, {}, nullptr, {});
   auto r = (*reference)->render(*want, v, {}, nullptr, {});
   ASSERT_TRUE(a.is_ok() && r.is_ok());
-  EXPECT_EQ(a->rgba, r->rgba);
+  const auto bound = frame_bounds().find(GetParam());
+  if (bound == frame_bounds().end()) {
+    EXPECT_EQ(a->rgba, r->rgba);
+  } else {
+    ASSERT_EQ(a->rgba.size(), r->rgba.size());
+    float worst = 0;
+    for (std::size_t k = 0; k < a->rgba.size(); ++k) worst = std::max(worst, std::fabs(a->rgba[k] - r->rgba[k]));
+    EXPECT_LE(worst, bound->second.max_abs) << bound->second.reason;
+  }
 }
 
 TEST_P(EveryBackend, ANonConformantBackendSaysWhy) {

@@ -32,6 +32,10 @@ const std::vector<BackendInfo>& registered_backends() {
     v.push_back({"cpu", "every core, vectorised exact kernels: the reference's bytes (R1-BKD-040)", true,
                  [] { return make_cpu_backend(); }});
 #endif
+#if R1_BACKEND_VULKAN
+    v.push_back({"vulkan", "frame passes on a Vulkan 1.3 device (lavapipe in CI), epoch stages on the host (R1-BKD-065)", true,
+                 [] { return make_vulkan_backend(); }});
+#endif
 #if R1_BACKEND_FP64
     // Not expected to conform: where eigenvalues repeat (ring, torus) the fp64 and Q32 solvers
     // return different bases of the same eigenspace, so positions and topology differ (README).

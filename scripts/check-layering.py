@@ -29,6 +29,9 @@ ADAPTER_IMPLEMENTATION = {
     "backends/adapters/host_device.cpp": {"reference"},  # the trait over host memory: the reference's Clifford
     # the trait on accel/vulkan's context, det_exp's constants from the reference's Clifford
     "backends/adapters/vulkan_device.cpp": {"reference", "accel"},
+    "backends/adapters/vulkan_adapters.hpp": {"accel"},  # the context the Vulkan device and backend share
+    # the vulkan backend: accel/vulkan's frame passes, the cpu backend's kernels for its epoch stages
+    "backends/adapters/vulkan_backend.cpp": {"reference", "accel", "solvers"},
 }
 
 # Layer of a file by its path, first match wins.

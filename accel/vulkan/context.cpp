@@ -68,6 +68,7 @@ struct Context::State {
       vkDeviceWaitIdle(device);
       for (VkPipeline p : pipelines) vkDestroyPipeline(device, p, nullptr);
       for (const Buffer& b : buffers) {
+        if (b.buffer == VK_NULL_HANDLE) continue;  // released
         if (b.memory != VK_NULL_HANDLE) vkUnmapMemory(device, b.memory);
         vkDestroyBuffer(device, b.buffer, nullptr);
         vkFreeMemory(device, b.memory, nullptr);
@@ -197,6 +198,7 @@ Result<std::unique_ptr<Context>> Context::create() {
     s->info.api = p2.properties.apiVersion;
     s->info.cpu = p2.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     s->limits = p2.properties.limits;
+    s->info.max_buffer = p2.properties.limits.maxStorageBufferRange;
   }
   vkGetPhysicalDeviceMemoryProperties(s->physical, &s->memory);
 
@@ -263,6 +265,16 @@ Result<std::uint32_t> Context::buffer_create(std::size_t bytes) {
     return Status::input("vulkan: a buffer of " + std::to_string(bytes) + " bytes exceeds the device's storage range of " +
                          std::to_string(s_->limits.maxStorageBufferRange));
   return s_->make_buffer(bytes);
+}
+
+void Context::buffer_release(std::uint32_t id) {
+  if (id < 1 || id >= s_->buffers.size() || s_->buffers[id].buffer == VK_NULL_HANDLE) return;
+  auto& b = s_->buffers[id];
+  vkDeviceWaitIdle(s_->device);
+  vkUnmapMemory(s_->device, b.memory);
+  vkDestroyBuffer(s_->device, b.buffer, nullptr);
+  vkFreeMemory(s_->device, b.memory, nullptr);
+  b = State::Buffer{};
 }
 
 std::size_t Context::buffer_size(std::uint32_t id) const {
@@ -355,7 +367,7 @@ Status Context::dispatch(std::uint32_t pipeline, std::span<const Slot> slots, st
   for (auto& i : infos) i = {s.buffers[0].buffer, 0, VK_WHOLE_SIZE};
   for (const Slot& slot : slots) {
     if (slot.binding >= kSlots) return Status::input("vulkan: binding " + std::to_string(slot.binding) + " beyond the " + std::to_string(kSlots) + " slots");
-    if (slot.buffer < 1 || slot.buffer >= s.buffers.size()) return Status::input("vulkan: no buffer " + std::to_string(slot.buffer));
+    if (slot.buffer < 1 || slot.buffer >= s.buffers.size() || s.buffers[slot.buffer].buffer == VK_NULL_HANDLE) return Status::input("vulkan: no buffer " + std::to_string(slot.buffer));
     infos[slot.binding] = {s.buffers[slot.buffer].buffer, 0, VK_WHOLE_SIZE};
   }
   if (VkResult r = vkResetDescriptorPool(s.device, s.descriptors, 0); r != VK_SUCCESS) return fail("vkResetDescriptorPool", r);

@@ -17,6 +17,10 @@ std::unique_ptr<Backend> make_reference_backend(bool fp64 = false);
 // Throws std::invalid_argument when $R1_CPU_SIMD names a level this CPU lacks.
 std::unique_ptr<Backend> make_cpu_backend();
 
+// The vulkan backend (R1-BKD-065): frame passes on a Vulkan device, epoch stages on the host.
+// Throws std::invalid_argument saying why when no usable Vulkan device exists.
+std::unique_ptr<Backend> make_vulkan_backend();
+
 // Well-formed, deliberately wrong results at every stage (R1-BKD-021).
 std::unique_ptr<Backend> make_null_backend();
 

@@ -3,11 +3,13 @@
 // the reference renderer; it counts its calls (R1-BKD-004). Internal to backends/adapters.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 
 #include "r1/backends/backend.hpp"
+#include "r1/backends/device.hpp"
 #include "r1/reference/epoch.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
@@ -18,6 +20,14 @@ class StageBackend final : public Backend {
  public:
   StageBackend(std::string name, std::string summary, ReferenceStages stages, Domain domain)
       : name_(std::move(name)), summary_(std::move(summary)), stages_(std::move(stages)), domain_(domain) {}
+  // With frame passes of its own (render/passes.hpp; the reference's where `passes` has none) and
+  // a 13.1 device.
+  StageBackend(std::string name, std::string summary, ReferenceStages stages, Domain domain, render::FramePasses passes,
+               std::unique_ptr<Device> device)
+      : StageBackend(std::move(name), std::move(summary), std::move(stages), domain) {
+    passes_ = std::move(passes);
+    device_ = std::move(device);
+  }
 
   std::string_view name() const override { return name_; }
   std::string_view summary() const override { return summary_; }
@@ -25,6 +35,7 @@ class StageBackend final : public Backend {
   // The canonical epoch is Q32 (fp64 for the fp64 backend's spectral and focus stages); the frame
   // is fp64 either way (pixels are not canonical, R-1.0 12.3).
   Domain numeric_domain() const override { return domain_; }
+  Device* device() override { return device_.get(); }
 
   Result<Spectrum<Q32>> spectral(const Graph& g, const EpochOptions& o, const ProgressFn& p) override {
     ++calls_[Stage::kSpectral];
@@ -65,7 +76,7 @@ class StageBackend final : public Backend {
       scene_ = render::make_scene(e);
       key_ = key;
     }
-    return render::render_frame(*scene_, v, o, stats, progress);
+    return render::render_frame(*scene_, v, o, stats, progress, passes_);
   }
 
  private:
@@ -78,6 +89,8 @@ class StageBackend final : public Backend {
   std::string name_, summary_;
   ReferenceStages stages_;
   Domain domain_;
+  render::FramePasses passes_;
+  std::unique_ptr<Device> device_;
   std::optional<render::Scene> scene_;
   Key key_;
 };

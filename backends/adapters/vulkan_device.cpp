@@ -7,6 +7,7 @@
 #include "r1/accel/vulkan.hpp"
 #include "r1/backends/device.hpp"
 #include "r1/reference/clifford.hpp"
+#include "vulkan_adapters.hpp"
 
 namespace r1::backends {
 
@@ -18,7 +19,7 @@ Status not_yet(const char* what) {
 
 class VulkanDevice final : public Device {
  public:
-  VulkanDevice(std::unique_ptr<vk::Context> ctx, vk::CliffordKernels kernels)
+  VulkanDevice(std::shared_ptr<vk::Context> ctx, vk::CliffordKernels kernels)
       : ctx_(std::move(ctx)), kernels_(std::move(kernels)) {}
 
   Result<BufferId> buffer_create(std::size_t size, BufferUsage) override { return ctx_->buffer_create(size); }
@@ -61,14 +62,18 @@ class VulkanDevice final : public Device {
   }
 
  private:
-  std::unique_ptr<vk::Context> ctx_;
+  std::shared_ptr<vk::Context> ctx_;
   vk::CliffordKernels kernels_;
 };
 
 }  // namespace
 
 Result<std::unique_ptr<Device>> make_vulkan_device() {
-  R1_ASSIGN(auto ctx, vk::Context::create());
+  R1_ASSIGN(std::shared_ptr<vk::Context> ctx, vk::Context::create());
+  return make_vulkan_device_on(std::move(ctx));
+}
+
+Result<std::unique_ptr<Device>> make_vulkan_device_on(std::shared_ptr<vk::Context> ctx) {
   vk::ExpConstants c;
   c.log2e = clifford::detail::kLog2e;
   c.ln2_hi = clifford::detail::kLn2Hi;

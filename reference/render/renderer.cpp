@@ -19,20 +19,6 @@ constexpr double kSplatLowPass = 0.3;        // px^2 added to the projected cova
 constexpr double kMinAlpha = 1.0 / 255.0;    // splat contributions below this are dropped
 constexpr int kTile = 16;                    // splat binning tile, pixels
 
-// The opaque layer: nearest hit per pixel.
-struct Opaque {
-  std::vector<double> t;
-  std::vector<Vec3> color;
-  std::vector<std::int64_t> owner;  // particle index, -2 for an edge, -1 for none
-  Opaque(int w, int h)
-      : t(static_cast<std::size_t>(w) * h, kInf), color(static_cast<std::size_t>(w) * h), owner(static_cast<std::size_t>(w) * h, -1) {}
-};
-
-Vec3 shade(const Vec3& albedo, const Vec3& normal, const Vec3& dir) {
-  // A headlight: ambient 0.25 plus 0.75 Lambert toward the camera (R1-RND-061).
-  return albedo * (0.25 + 0.75 * std::max(0.0, -dot(normal, dir)));
-}
-
 // ---- edges and bundling (R1-RND-063..066) ----
 
 struct Endpoint {
@@ -350,115 +336,117 @@ std::vector<RowSpan> tube_spans(const View& v, const CameraFrame& f, const Vec3&
   return rows;
 }
 
-Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& options, FrameStats* stats_out,
-                           const ProgressFn& progress) {
-  using clock = std::chrono::steady_clock;
-  const auto start = clock::now();
-  FrameStats st;
-  const CameraFrame f = camera_frame(v);
-  const int W = v.width, H = v.height;
-  Image image(W, H);
+Vec3 headlight(const Vec3& albedo, const Vec3& normal, const Vec3& dir) {
+  return albedo * (0.25 + 0.75 * std::max(0.0, -dot(normal, dir)));
+}
 
-  // Cull and classify (R1-RND-020..023).
-  auto t0 = clock::now();
-  CullStats cs;
-  // Far nodes' members are visible T-infinity particles drawn by the field alone (R1-RND-025).
-  const CullResult culled = cull_frame(s, v, f, &cs);
-  const std::vector<Visible>& visible = culled.visible;
-  st.visible = visible.size() + culled.far_particles;
-  st.nodes_tested = cs.nodes_tested;
-  st.culled_nodes = cs.nodes_culled;
-  for (const Visible& vis : visible) ++st.tier_count[static_cast<std::size_t>(vis.tier)];
-  st.tier_count[static_cast<std::size_t>(Tier::kTinf)] += culled.far_particles;
-  st.cull_s = seconds_since(t0);
-
-  // Opaque impostors: T0 draws as T1 until the content tier exists (R1-RND-024).
-  t0 = clock::now();
-  Opaque op(W, H);
-  for (const Visible& vis : visible) {
+std::vector<Impostor> impostor_list(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled) {
+  std::vector<Impostor> out;
+  for (const Visible& vis : culled.visible) {
     if (vis.tier > Tier::kT2) continue;
     const std::uint32_t p = vis.particle;
     const double r = s.radius[p];
     const Vec3 c = s.position[p];
     const Rect rect = project_box(v, f, c - Vec3{r, r, r}, c + Vec3{r, r, r});
-    for (int y = rect.y0; y < rect.y1; ++y)
-      for (int x = rect.x0; x < rect.x1; ++x) {
+    if (!rect.empty()) out.push_back({p, s.shape[p], c, r, s.color[p], rect});
+  }
+  return out;
+}
+
+void draw_impostors(std::span<const Impostor> impostors, const View& v, const CameraFrame& f, OpaqueLayer& op) {
+  const int W = op.width;
+  for (const Impostor& im : impostors) {
+    for (int y = im.rect.y0; y < im.rect.y1; ++y)
+      for (int x = im.rect.x0; x < im.rect.x1; ++x) {
         const std::size_t k = static_cast<std::size_t>(y) * W + x;
         const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
-        const auto hit = intersect_shape(s.shape[p], c, r, ray, kNear, op.t[k]);
+        const auto hit = intersect_shape(im.shape, im.center, im.radius, ray, kNear, op.t[k]);
         if (!hit) continue;
         op.t[k] = hit->t;
-        op.color[k] = shade(s.color[p], hit->normal, ray.d);
-        op.owner[k] = p;
+        op.color[k] = headlight(im.color, hit->normal, ray.d);
+        op.owner[k] = im.particle;
       }
   }
-  st.impostor_s = seconds_since(t0);
+}
 
-  // Edge tubes with the flow strip (R1-RND-063..066).
-  t0 = clock::now();
-  if (v.edges) {
-    const std::vector<double> size = screen_sizes(s, v, f, culled);
-    BundleStats bs;
-    const std::vector<Tube> tubes = bundle(s, v, f, size, bs);
-    st.edges_in_view = bs.in_view;
-    st.edges_considered = bs.considered;
-    st.edges_drawn = bs.drawn;
-    for (const Tube& tube : tubes) {
-      const Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
-      const double cap = 0.3 * std::min(endpoint_radius(s, tube.a), endpoint_radius(s, tube.b));
-      const double rho = std::min(0.1 * s.median_radius * std::sqrt(tube.w), cap);
-      if (!(rho > 0)) continue;
-      // Flow: v = sign(A2) |P_ab| cycles per second along the strip (R-1.0 8.2).
-      const double p_ab = tube.degree_a > 0 ? tube.w / tube.degree_a : 0.0;
-      const double speed = (tube.a2 > 0 ? 1.0 : (tube.a2 < 0 ? -1.0 : 0.0)) * std::fabs(p_ab);
-      const double stripes = std::max(1.0, std::round(length(b - a) / (8 * rho)));
-      const Vec3 ca = endpoint_color(s, tube.a), cb = endpoint_color(s, tube.b);
-      for (const RowSpan& row : tube_spans(v, f, a, b, rho))
-        for (int x = row.x0; x < row.x1; ++x) {
-          const int y = row.y;
-          const std::size_t k = static_cast<std::size_t>(y) * W + x;
-          const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
-          const auto hit = intersect_tube(a, b, rho, ray, kNear, op.t[k]);
-          if (!hit) continue;
-          const double phase = stripes * hit->u - speed * v.time;
-          const double strip = 0.55 + 0.45 * 0.5 * (1 + std::cos(2 * kPi * (phase - std::floor(phase))));
-          op.t[k] = hit->hit.t;
-          op.color[k] = shade((ca * (1 - hit->u) + cb * hit->u) * (0.6 * strip), hit->hit.normal, ray.d);
-          op.owner[k] = -2;
-        }
-    }
+namespace {
+
+// Edge tubes with the flow strip (R1-RND-063..066), drawn into the opaque layer after the impostors.
+void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled, OpaqueLayer& op, FrameStats& st) {
+  const int W = op.width;
+  const std::vector<double> size = screen_sizes(s, v, f, culled);
+  BundleStats bs;
+  const std::vector<Tube> tubes = bundle(s, v, f, size, bs);
+  st.edges_in_view = bs.in_view;
+  st.edges_considered = bs.considered;
+  st.edges_drawn = bs.drawn;
+  for (const Tube& tube : tubes) {
+    const Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
+    const double cap = 0.3 * std::min(endpoint_radius(s, tube.a), endpoint_radius(s, tube.b));
+    const double rho = std::min(0.1 * s.median_radius * std::sqrt(tube.w), cap);
+    if (!(rho > 0)) continue;
+    // Flow: v = sign(A2) |P_ab| cycles per second along the strip (R-1.0 8.2).
+    const double p_ab = tube.degree_a > 0 ? tube.w / tube.degree_a : 0.0;
+    const double speed = (tube.a2 > 0 ? 1.0 : (tube.a2 < 0 ? -1.0 : 0.0)) * std::fabs(p_ab);
+    const double stripes = std::max(1.0, std::round(length(b - a) / (8 * rho)));
+    const Vec3 ca = endpoint_color(s, tube.a), cb = endpoint_color(s, tube.b);
+    for (const RowSpan& row : tube_spans(v, f, a, b, rho))
+      for (int x = row.x0; x < row.x1; ++x) {
+        const int y = row.y;
+        const std::size_t k = static_cast<std::size_t>(y) * W + x;
+        const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
+        const auto hit = intersect_tube(a, b, rho, ray, kNear, op.t[k]);
+        if (!hit) continue;
+        const double phase = stripes * hit->u - speed * v.time;
+        const double strip = 0.55 + 0.45 * 0.5 * (1 + std::cos(2 * kPi * (phase - std::floor(phase))));
+        op.t[k] = hit->hit.t;
+        op.color[k] = headlight((ca * (1 - hit->u) + cb * hit->u) * (0.6 * strip), hit->hit.normal, ray.d);
+        op.owner[k] = OpaqueLayer::kEdge;
+      }
   }
-  st.edge_s = seconds_since(t0);
+}
 
-  // Splats: every visible T3 particle, and the handoff band's share of T-inf ones (R1-RND-045).
-  t0 = clock::now();
-  const std::vector<Vec3> grad = v.splat_stretch > 0 ? u5_gradients(s) : std::vector<Vec3>{};
+// The splats of a frame, front to back, binned into kTile tiles (R1-RND-040..045).
+struct SplatBins {
   std::vector<Splat> splats;
-  for (const Visible& vis : visible) {
+  int tiles_x = 0, tiles_y = 0;
+  std::vector<std::vector<std::uint32_t>> tiles;  // per tile, indices into splats in depth order
+};
+
+SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled) {
+  // Every visible T3 particle, and the handoff band's share of T-inf ones (R1-RND-045).
+  const std::vector<Vec3> grad = v.splat_stretch > 0 ? u5_gradients(s) : std::vector<Vec3>{};
+  SplatBins b;
+  for (const Visible& vis : culled.visible) {
     if (vis.tier < Tier::kT3) continue;
     const double weight = 1.0 - tinf_weight(vis.s, v.tiers);
     Splat sp;
-    if (weight > 0 && make_splat(s, v, f, vis.particle, weight, grad, sp)) splats.push_back(sp);
+    if (weight > 0 && make_splat(s, v, f, vis.particle, weight, grad, sp)) b.splats.push_back(sp);
   }
-  st.splats = splats.size();
   // Front to back by depth, ties by particle index (R1-RND-043), binned into tiles.
-  std::sort(splats.begin(), splats.end(),
-            [](const Splat& a, const Splat& b) { return a.depth != b.depth ? a.depth < b.depth : a.particle < b.particle; });
-  const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
-  std::vector<std::vector<std::uint32_t>> tiles(static_cast<std::size_t>(tiles_x) * tiles_y);
-  for (std::uint32_t i = 0; i < splats.size(); ++i) {
-    const double reach = splat_reach(splats[i]);
-    const int x0 = std::max(0, static_cast<int>(std::floor((splats[i].px - reach) / kTile)));
-    const int x1 = std::min(tiles_x - 1, static_cast<int>(std::floor((splats[i].px + reach) / kTile)));
-    const int y0 = std::max(0, static_cast<int>(std::floor((splats[i].py - reach) / kTile)));
-    const int y1 = std::min(tiles_y - 1, static_cast<int>(std::floor((splats[i].py + reach) / kTile)));
+  std::sort(b.splats.begin(), b.splats.end(),
+            [](const Splat& a, const Splat& c) { return a.depth != c.depth ? a.depth < c.depth : a.particle < c.particle; });
+  b.tiles_x = (v.width + kTile - 1) / kTile, b.tiles_y = (v.height + kTile - 1) / kTile;
+  b.tiles.resize(static_cast<std::size_t>(b.tiles_x) * b.tiles_y);
+  for (std::uint32_t i = 0; i < b.splats.size(); ++i) {
+    const Splat& sp = b.splats[i];
+    const double reach = splat_reach(sp);
+    const int x0 = std::max(0, static_cast<int>(std::floor((sp.px - reach) / kTile)));
+    const int x1 = std::min(b.tiles_x - 1, static_cast<int>(std::floor((sp.px + reach) / kTile)));
+    const int y0 = std::max(0, static_cast<int>(std::floor((sp.py - reach) / kTile)));
+    const int y1 = std::min(b.tiles_y - 1, static_cast<int>(std::floor((sp.py + reach) / kTile)));
     for (int ty = y0; ty <= y1; ++ty)
-      for (int tx = x0; tx <= x1; ++tx) tiles[static_cast<std::size_t>(ty) * tiles_x + tx].push_back(i);
+      for (int tx = x0; tx <= x1; ++tx) b.tiles[static_cast<std::size_t>(ty) * b.tiles_x + tx].push_back(i);
   }
-  st.splat_s = seconds_since(t0);
+  return b;
+}
 
-  // Composite per pixel, front to back in ray order: splats and field samples up to the opaque
-  // hit, then the hit (R1-RND-070).
+// Composite per pixel, front to back in ray order: splats and field samples up to the opaque
+// hit, then the hit (R1-RND-070).
+void composite(const Scene& s, const View& v, const CameraFrame& f, const RenderOptions& options, const OpaqueLayer& op,
+               const SplatBins& bins, Image& image, FrameStats& st, const ProgressFn& progress) {
+  using clock = std::chrono::steady_clock;
+  const int W = v.width, H = v.height;
   const FieldFrame ff = make_field_frame(s, v, f, options.field);
   std::vector<FieldSample> samples;
   struct SplatHit {
@@ -481,10 +469,11 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
       auto c1 = clock::now();
       hits.clear();
       const double cos_fwd = dot(ray.d, f.forward);
-      for (std::uint32_t i : tiles[static_cast<std::size_t>(y / kTile) * tiles_x + x / kTile]) {
-        const double t = splats[i].depth / cos_fwd;
+      for (std::uint32_t i : bins.tiles[static_cast<std::size_t>(y / kTile) * bins.tiles_x + x / kTile]) {
+        const Splat& sp = bins.splats[i];
+        const double t = sp.depth / cos_fwd;
         if (t >= t_op) continue;
-        const double a = splat_alpha(splats[i], x + 0.5, y + 0.5);
+        const double a = splat_alpha(sp, x + 0.5, y + 0.5);
         if (a >= kMinAlpha) hits.push_back({t, a, i});
       }
       // Tile lists are in depth order; the ray parameter keeps it (t = depth / cos).
@@ -495,7 +484,7 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
         const bool take_splat = j < hits.size() && (i >= samples.size() || hits[j].t <= samples[i].t);
         if (take_splat) {
           const SplatHit& h = hits[j++];
-          color += splats[h.splat].color * (T * h.alpha);
+          color += bins.splats[h.splat].color * (T * h.alpha);
           T *= 1 - h.alpha;
         } else {
           const FieldSample& fsmp = samples[i++];
@@ -526,30 +515,77 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   st.field_samples = fs.samples;
   st.field_candidates = fs.candidates;
   st.field_evaluations = fs.evaluations;
+}
 
-  // Labels at T1 (and T0, drawn as T1): title or hex prefix beside the particle, far ones first,
-  // only where the particle itself is the nearest surface at its centre (R1-RND-067).
-  t0 = clock::now();
-  if (v.labels) {
-    std::vector<const Visible*> labelled;
-    for (const Visible& vis : visible)
-      if (vis.tier <= Tier::kT1) labelled.push_back(&vis);
-    std::sort(labelled.begin(), labelled.end(), [](const Visible* a, const Visible* b) {
-      return a->depth != b->depth ? a->depth > b->depth : a->particle < b->particle;
-    });
-    for (const Visible* vis : labelled) {
-      const Projected pr = project(v, f, s.position[vis->particle]);
-      if (pr.depth <= kNear) continue;
-      const int cx = static_cast<int>(std::floor(pr.px)), cy = static_cast<int>(std::floor(pr.py));
-      if (cx < 0 || cy < 0 || cx >= W || cy >= H) continue;
-      if (op.owner[static_cast<std::size_t>(cy) * W + cx] != static_cast<std::int64_t>(vis->particle)) continue;
-      const double half = std::min(vis->s, 4.0 * H) * 0.5;
-      const int text_px = 14;
-      R1_TRY(draw_text(image, static_cast<int>(pr.px + half * 0.75) + 4, cy + text_px / 3, s.label[vis->particle], text_px,
-                       {0.85f, 0.85f, 0.85f}));
-      ++st.labels;
-    }
+// Labels at T1 (and T0, drawn as T1): title or hex prefix beside the particle, far ones first,
+// only where the particle itself is the nearest surface at its centre (R1-RND-067).
+Status draw_labels(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled, const OpaqueLayer& op,
+                   Image& image, FrameStats& st) {
+  const int W = v.width, H = v.height;
+  std::vector<const Visible*> labelled;
+  for (const Visible& vis : culled.visible)
+    if (vis.tier <= Tier::kT1) labelled.push_back(&vis);
+  std::sort(labelled.begin(), labelled.end(), [](const Visible* a, const Visible* b) {
+    return a->depth != b->depth ? a->depth > b->depth : a->particle < b->particle;
+  });
+  for (const Visible* vis : labelled) {
+    const Projected pr = project(v, f, s.position[vis->particle]);
+    if (pr.depth <= kNear) continue;
+    const int cx = static_cast<int>(std::floor(pr.px)), cy = static_cast<int>(std::floor(pr.py));
+    if (cx < 0 || cy < 0 || cx >= W || cy >= H) continue;
+    if (op.owner[static_cast<std::size_t>(cy) * W + cx] != static_cast<std::int64_t>(vis->particle)) continue;
+    const double half = std::min(vis->s, 4.0 * H) * 0.5;
+    const int text_px = 14;
+    R1_TRY(draw_text(image, static_cast<int>(pr.px + half * 0.75) + 4, cy + text_px / 3, s.label[vis->particle], text_px,
+                     {0.85f, 0.85f, 0.85f}));
+    ++st.labels;
   }
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& options, FrameStats* stats_out,
+                           const ProgressFn& progress, const FramePasses& passes) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  FrameStats st;
+  const CameraFrame f = camera_frame(v);
+  Image image(v.width, v.height);
+
+  // Cull and classify (R1-RND-020..023). Far nodes' members are visible T-infinity particles
+  // drawn by the field alone (R1-RND-025).
+  auto t0 = clock::now();
+  CullStats cs;
+  const CullResult culled = cull_frame(s, v, f, &cs);
+  st.visible = culled.visible.size() + culled.far_particles;
+  st.nodes_tested = cs.nodes_tested;
+  st.culled_nodes = cs.nodes_culled;
+  for (const Visible& vis : culled.visible) ++st.tier_count[static_cast<std::size_t>(vis.tier)];
+  st.tier_count[static_cast<std::size_t>(Tier::kTinf)] += culled.far_particles;
+  st.cull_s = seconds_since(t0);
+
+  // Opaque impostors (R1-RND-076: the backend's pass when it has one).
+  t0 = clock::now();
+  OpaqueLayer op(v.width, v.height);
+  const std::vector<Impostor> impostors = impostor_list(s, v, f, culled);
+  if (passes.impostors) R1_TRY(passes.impostors(impostors, v, f, op));
+  else draw_impostors(impostors, v, f, op);
+  st.impostor_s = seconds_since(t0);
+
+  t0 = clock::now();
+  if (v.edges) draw_edges(s, v, f, culled, op, st);
+  st.edge_s = seconds_since(t0);
+
+  t0 = clock::now();
+  const SplatBins bins = bin_splats(s, v, f, culled);
+  st.splats = bins.splats.size();
+  st.splat_s = seconds_since(t0);
+
+  composite(s, v, f, options, op, bins, image, st, progress);
+
+  t0 = clock::now();
+  if (v.labels) R1_TRY(draw_labels(s, v, f, culled, op, image, st));
   st.label_s = seconds_since(t0);
   st.total_s = seconds_since(start);
   if (stats_out) *stats_out = st;

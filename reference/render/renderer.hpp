@@ -12,6 +12,7 @@
 #include "cull.hpp"
 #include "field.hpp"
 #include "image.hpp"
+#include "passes.hpp"
 #include "scene.hpp"
 #include "view.hpp"
 #include "r1/spec/progress.hpp"
@@ -19,9 +20,10 @@
 
 namespace r1::render {
 
-// Renders `view` of the scene into linear premultiplied RGBA (+ the field's flow channels).
+// Renders `view` of the scene into linear premultiplied RGBA (+ the field's flow channels), with
+// the backend's passes where `passes` has them (passes.hpp) and the reference's elsewhere.
 Result<Image> render_frame(const Scene& scene, const View& view, const RenderOptions& options, FrameStats* stats,
-                           const ProgressFn& progress = {});
+                           const ProgressFn& progress = {}, const FramePasses& passes = {});
 
 // Edge bundling alone (R1-RND-064), for the README's reduction table and tests.
 struct BundleStats {

@@ -12,7 +12,9 @@
 #include <string_view>
 #include <vector>
 
+#include "r1/spec/epoch.hpp"
 #include "r1/spec/status.hpp"
+#include "r1/spec/vec3.hpp"
 
 namespace r1::vk {
 
@@ -21,6 +23,7 @@ struct DeviceInfo {
   std::string driver;       // VkPhysicalDeviceDriverProperties::driverName, e.g. "llvmpipe"
   std::uint32_t api = 0;    // VkPhysicalDeviceProperties::apiVersion
   bool cpu = false;         // VK_PHYSICAL_DEVICE_TYPE_CPU (lavapipe)
+  std::size_t max_buffer = 0;  // the largest storage buffer a shader may bind (maxStorageBufferRange)
 };
 
 struct Slot {
@@ -47,6 +50,8 @@ class Context {
 
   Result<std::uint32_t> buffer_create(std::size_t bytes);
   std::size_t buffer_size(std::uint32_t id) const;  // 0 for no such buffer
+  // Frees the buffer's memory; its id then names no buffer (a no-op for an id that names none).
+  void buffer_release(std::uint32_t id);
   Status buffer_write(std::uint32_t id, std::span<const std::uint8_t> data, std::size_t offset);
   Result<std::vector<std::uint8_t>> buffer_read(std::uint32_t id, std::size_t offset, std::size_t size);
 
@@ -111,6 +116,44 @@ class ExactSpmv {
   std::uint32_t rows_ = 0, columns_ = 0;
   bool identity_ = false;
   std::uint32_t pipeline_ = 0, row_ptr_ = 0, col_ = 0, val_ = 0, x_ = 0, y_ = 0, flag_ = 0;
+};
+
+// The pinhole camera of a frame as the impostor pass needs it (render::CameraFrame and the image
+// size): the ray through pixel centre (x + 0.5, y + 0.5) has direction
+// normalize(forward + right sx + up sy), sx = (x + 0.5 - width / 2) / focal_px,
+// sy = (height / 2 - y - 0.5) / focal_px.
+struct ImpostorCamera {
+  render::Vec3 position, right, up, forward;
+  double focal_px = 0;
+  std::uint32_t width = 0, height = 0;
+};
+
+// One analytic impostor: the particle, its shape, centre, bounding radius, albedo and the pixel
+// rectangle [x0, x1) x [y0, y1) outside which it is not drawn.
+struct ImpostorItem {
+  std::uint32_t particle = 0;
+  Shape shape = Shape::kSphere;
+  render::Vec3 center;
+  double radius = 0;
+  render::Vec3 color;
+  std::int32_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+// The T1/T2 impostor pass (R1-BKD-065): per pixel, the nearest hit of the pixel's ray with the
+// items whose rectangle holds the pixel (ties to the earlier item), shaded by the headlight
+// 0.25 + 0.75 max(0, -n.d); t is infinity and owner -1 where nothing is hit. The reference's
+// fp64 intersections (reference/render/shapes.cpp) operation for operation.
+class ImpostorPass {
+ public:
+  static Result<ImpostorPass> build(Context& ctx);
+  Status draw(const ImpostorCamera& camera, std::span<const ImpostorItem> items, std::span<double> t,
+              std::span<render::Vec3> color, std::span<std::int64_t> owner);
+
+ private:
+  Status reserve(std::size_t which, std::size_t bytes);
+  Context* ctx_ = nullptr;
+  std::uint32_t pipeline_ = 0;
+  std::array<std::uint32_t, 8> buffers_{};
 };
 
 }  // namespace r1::vk

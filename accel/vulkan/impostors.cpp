@@ -1,0 +1,451 @@
+// The T1/T2 impostor pass as a Vulkan compute shader (spec/backends.md R1-BKD-065): one invocation
+// per pixel casts the pixel's ray at the impostors binned into its 16-pixel tile, in list order,
+// with the reference's fp64 ray-shape intersections written out operation for operation and every
+// arithmetic value `precise` (no contraction into fma). GLSL has no fp64 acos, cos or cbrt: the
+// torus's resolvent cubic starts from fp32 estimates of them and reaches its root by the
+// reference's Newton steps in fp64.
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "r1/accel/vulkan.hpp"
+
+namespace r1::vk {
+
+using render::Vec3;
+
+namespace {
+
+constexpr int kTile = 16;
+
+// Bindings: 0 geometry (8 doubles an impostor: centre, radius, colour, 0), 1 meta (8 ints:
+// rectangle x0 y0 x1 y1, particle, shape, 0, 0), 2 tile offsets, 3 tile items, 4 t, 5 colour
+// (3 doubles a pixel), 6 owner, 7 camera (position, right, up, forward, focal_px).
+constexpr const char* kImpostors = R"(#version 460
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(std430, binding = 0) readonly buffer G { double geo[]; };
+layout(std430, binding = 1) readonly buffer M { int meta[]; };
+layout(std430, binding = 2) readonly buffer TP { uint tile_ptr[]; };
+layout(std430, binding = 3) readonly buffer TI { uint tile_item[]; };
+layout(std430, binding = 4) writeonly buffer OT { double out_t[]; };
+layout(std430, binding = 5) writeonly buffer OC { double out_c[]; };
+layout(std430, binding = 6) writeonly buffer OO { int out_owner[]; };
+layout(std430, binding = 7) readonly buffer CAM { double cam[]; };
+layout(push_constant) uniform P { uint width; uint height; uint tiles_x; uint y0; uint rows; } p;
+
+const double kInvSqrt3 = 0.57735026918962576450914878050196LF;
+const double kInvSqrt2 = 0.70710678118654752440084436210485LF;
+const double kTorusMajor = 0.65LF;
+const double kTorusMinor = 0.35LF;
+const double kTorusResidual = 1e-9LF;
+const double kNear = 1e-3LF;
+const double kPi = 3.14159265358979323846LF;
+const int kPolishSteps = 8;
+
+double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
+double copysign_of(double m, double s) { return (unpackDouble2x32(s).y >> 31) != 0u ? -abs(m) : abs(m); }
+double dotp(dvec3 a, dvec3 b) { precise double r = a.x * b.x + a.y * b.y + a.z * b.z; return r; }
+double len(dvec3 a) { precise double r = sqrt(dotp(a, a)); return r; }
+dvec3 nrm(dvec3 a) { double l = len(a); precise dvec3 r = dvec3(a.x / l, a.y / l, a.z / l); return r; }
+
+int quadratic_roots(double a, double bh, double c, double disc, out double r0, out double r1) {
+  r0 = 0.0LF; r1 = 0.0LF;
+  if (!(disc >= 0.0LF)) return 0;
+  precise double s = sqrt(disc);
+  precise double q = -(bh + copysign_of(s, bh));
+  if (q == 0.0LF) return 2;
+  precise double x0 = q / a;
+  precise double x1 = c / q;
+  if (x0 > x1) { r0 = x1; r1 = x0; } else { r0 = x0; r1 = x1; }
+  return 2;
+}
+
+struct Span { double te; double tx; dvec3 ne; dvec3 nx; bool empty; };
+
+void clip(inout Span sp, dvec3 n, double h, dvec3 unit_n, dvec3 o, dvec3 d) {
+  double denom = dotp(n, d);
+  precise double num = h - dotp(n, o);
+  if (denom == 0.0LF) { if (num < 0.0LF) sp.empty = true; return; }
+  precise double t = num / denom;
+  if (denom < 0.0LF) { if (t > sp.te) { sp.te = t; sp.ne = unit_n; } }
+  else if (t < sp.tx) { sp.tx = t; sp.nx = unit_n; }
+}
+
+bool span_hit(Span sp, double tmin, double tmax, out double t, out dvec3 n) {
+  t = 0.0LF; n = dvec3(0.0LF);
+  if (sp.empty || !(sp.te <= sp.tx)) return false;
+  if (sp.te > tmin && sp.te < tmax) { t = sp.te; n = sp.ne; return true; }
+  if (sp.te <= tmin && sp.tx > tmin && sp.tx < tmax) { t = sp.tx; n = sp.nx; return true; }
+  return false;
+}
+
+Span new_span() { return Span(-inf(), inf(), dvec3(0.0LF), dvec3(0.0LF), false); }
+
+bool face(inout Span sp, dvec3 n, double h, double inv, dvec3 o, double r, dvec3 d) {
+  precise double hr = h * r;
+  precise dvec3 un = dvec3(n.x * inv, n.y * inv, n.z * inv);
+  clip(sp, n, hr, un, o, d);
+  return !sp.empty;
+}
+
+bool polytope(uint shape, dvec3 o, double r, dvec3 d, double tmin, double tmax, out double t, out dvec3 n) {
+  Span sp = new_span();
+  t = 0.0LF; n = dvec3(0.0LF);
+  if (shape == 2u) {  // tetrahedron
+    if (!face(sp, dvec3(-1, -1, -1), kInvSqrt3, kInvSqrt3, o, r, d)) return false;
+    if (!face(sp, dvec3(-1, +1, +1), kInvSqrt3, kInvSqrt3, o, r, d)) return false;
+    if (!face(sp, dvec3(+1, -1, +1), kInvSqrt3, kInvSqrt3, o, r, d)) return false;
+    if (!face(sp, dvec3(+1, +1, -1), kInvSqrt3, kInvSqrt3, o, r, d)) return false;
+  } else if (shape == 3u) {  // cube
+    if (!face(sp, dvec3(+1, 0, 0), kInvSqrt3, 1.0LF, o, r, d)) return false;
+    if (!face(sp, dvec3(-1, 0, 0), kInvSqrt3, 1.0LF, o, r, d)) return false;
+    if (!face(sp, dvec3(0, +1, 0), kInvSqrt3, 1.0LF, o, r, d)) return false;
+    if (!face(sp, dvec3(0, -1, 0), kInvSqrt3, 1.0LF, o, r, d)) return false;
+    if (!face(sp, dvec3(0, 0, +1), kInvSqrt3, 1.0LF, o, r, d)) return false;
+    if (!face(sp, dvec3(0, 0, -1), kInvSqrt3, 1.0LF, o, r, d)) return false;
+  } else {  // octahedron
+    for (int k = 0; k < 8; ++k) {
+      dvec3 s = dvec3((k & 4) != 0 ? -1 : 1, (k & 2) != 0 ? -1 : 1, (k & 1) != 0 ? -1 : 1);
+      if (!face(sp, s, 1.0LF, kInvSqrt3, o, r, d)) return false;
+    }
+  }
+  return span_hit(sp, tmin, tmax, t, n);
+}
+
+bool sphere(dvec3 o, double r, dvec3 d, double tmin, double tmax, out double t, out dvec3 n) {
+  t = 0.0LF; n = dvec3(0.0LF);
+  double a = dotp(d, d);
+  double bh = dotp(o, d);
+  precise double c = dotp(o, o) - r * r;
+  precise double s = bh / a;
+  precise dvec3 f = dvec3(o.x - d.x * s, o.y - d.y * s, o.z - d.z * s);
+  precise double disc = a * (r * r - dotp(f, f));
+  double t0, t1;
+  if (quadratic_roots(a, bh, c, disc, t0, t1) == 0) return false;
+  for (int i = 0; i < 2; ++i) {
+    double ti = i == 0 ? t0 : t1;
+    if (ti > tmin && ti < tmax) {
+      precise dvec3 x = dvec3(o.x + d.x * ti, o.y + d.y * ti, o.z + d.z * ti);
+      t = ti; n = nrm(x);
+      return true;
+    }
+  }
+  return false;
+}
+
+bool cylinder(dvec3 o, double r, dvec3 d, double tmin, double tmax, out double t, out dvec3 n) {
+  t = 0.0LF; n = dvec3(0.0LF);
+  precise double rc = r * kInvSqrt2;
+  Span sp = new_span();
+  clip(sp, dvec3(0, 0, 1), rc, dvec3(0, 0, 1), o, d);
+  clip(sp, dvec3(0, 0, -1), rc, dvec3(0, 0, -1), o, d);
+  if (sp.empty) return false;
+  precise double a = d.x * d.x + d.y * d.y;
+  precise double c = o.x * o.x + o.y * o.y - rc * rc;
+  if (a == 0.0LF) {
+    if (c > 0.0LF) return false;
+  } else {
+    precise double bh = o.x * d.x + o.y * d.y;
+    precise double fx = o.x - d.x * (bh / a);
+    precise double fy = o.y - d.y * (bh / a);
+    precise double disc = a * (rc * rc - (fx * fx + fy * fy));
+    double t0, t1;
+    if (quadratic_roots(a, bh, c, disc, t0, t1) == 0) return false;
+    if (t0 > sp.te) {
+      sp.te = t0;
+      precise dvec3 q = dvec3(o.x + d.x * t0, o.y + d.y * t0, 0.0LF);
+      sp.ne = nrm(q);
+    }
+    if (t1 < sp.tx) {
+      sp.tx = t1;
+      precise dvec3 q = dvec3(o.x + d.x * t1, o.y + d.y * t1, 0.0LF);
+      sp.nx = nrm(q);
+    }
+  }
+  return span_hit(sp, tmin, tmax, t, n);
+}
+
+double torus_implicit(dvec3 q) {
+  precise double rr = kTorusMajor * kTorusMajor;
+  precise double k = dotp(q, q) + rr - kTorusMinor * kTorusMinor;
+  precise double v = k * k - 4.0LF * rr * (q.x * q.x + q.y * q.y);
+  return v;
+}
+
+void quartic_eval(double c3, double c2, double c1, double c0, double x, out double f, out double df) {
+  precise double ff = (((x + c3) * x + c2) * x + c1) * x + c0;
+  precise double dd = ((4.0LF * x + 3.0LF * c3) * x + 2.0LF * c2) * x + c1;
+  f = ff; df = dd;
+}
+
+double polish(double c3, double c2, double c1, double c0, double x) {
+  double f, df;
+  quartic_eval(c3, c2, c1, c0, x, f, df);
+  for (int i = 0; i < kPolishSteps && f != 0.0LF && df != 0.0LF; ++i) {
+    precise double xn = x - f / df;
+    double fn, dfn;
+    quartic_eval(c3, c2, c1, c0, xn, fn, dfn);
+    if (!(abs(fn) < abs(f))) break;
+    x = xn; f = fn; df = dfn;
+  }
+  return x;
+}
+
+double largest_cubic_root(double a, double b, double c) {
+  precise double a3 = a / 3.0LF;
+  precise double Q = (a * a - 3.0LF * b) / 9.0LF;
+  precise double R = (2.0LF * a * a * a - 9.0LF * a * b + 27.0LF * c) / 54.0LF;
+  precise double m;
+  if (Q > 0.0LF && R * R < Q * Q * Q) {
+    precise double ratio = clamp(R / (Q * sqrt(Q)), -1.0LF, 1.0LF);
+    float theta = acos(float(ratio));
+    m = -2.0LF * sqrt(Q) * double(cos((theta + 2.0 * float(kPi)) / 3.0)) - a3;
+  } else {
+    precise double w = abs(R) + sqrt(R * R - Q * Q * Q);
+    double cb = double(pow(float(w), 1.0 / 3.0));
+    double A = -copysign_of(cb, R);
+    precise double B = A == 0.0LF ? 0.0LF : Q / A;
+    m = A + B - a3;
+  }
+  for (int i = 0; i < kPolishSteps; ++i) {
+    precise double f = ((m + a) * m + b) * m + c;
+    precise double df = (3.0LF * m + 2.0LF * a) * m + b;
+    if (f == 0.0LF || df == 0.0LF) break;
+    precise double mn = m - f / df;
+    precise double fn = ((mn + a) * mn + b) * mn + c;
+    if (!(abs(fn) < abs(f))) break;
+    m = mn;
+  }
+  return m;
+}
+
+int solve_quartic(double c3, double c2, double c1, double c0, out double roots[4]) {
+  roots[0] = 0.0LF; roots[1] = 0.0LF; roots[2] = 0.0LF; roots[3] = 0.0LF;
+  precise double sh = c3 / 4.0LF;
+  precise double sh2 = sh * sh;
+  precise double pp = c2 - 6.0LF * sh2;
+  precise double qq = c1 - 2.0LF * c2 * sh + 8.0LF * sh2 * sh;
+  precise double s = c0 - c1 * sh + c2 * sh2 - 3.0LF * sh2 * sh2;
+  precise double m = largest_cubic_root(-pp / 2.0LF, -s, (4.0LF * pp * s - qq * qq) / 8.0LF);
+  precise double A2 = max(2.0LF * m - pp, 0.0LF);
+  precise double B2 = max(m * m - s, 0.0LF);
+  precise double alpha, beta;
+  if (A2 >= B2) {
+    alpha = sqrt(A2);
+    beta = alpha == 0.0LF ? 0.0LF : qq / (2.0LF * alpha);
+  } else {
+    beta = sqrt(B2);
+    alpha = qq / (2.0LF * beta);
+  }
+  int count = 0;
+  for (int k = 0; k < 2; ++k) {
+    double sgn = k == 0 ? -1.0LF : 1.0LF;
+    precise double bh = sgn * alpha / 2.0LF;
+    precise double c = m - sgn * beta;
+    precise double disc = bh * bh - c;
+    double y0, y1;
+    if (quadratic_roots(1.0LF, bh, c, disc, y0, y1) == 0) continue;
+    precise double z0 = y0 - sh;
+    precise double z1 = y1 - sh;
+    roots[count++] = polish(c3, c2, c1, c0, z0);
+    roots[count++] = polish(c3, c2, c1, c0, z1);
+  }
+  for (int i = 1; i < count; ++i)
+    for (int j = i; j > 0 && roots[j - 1] > roots[j]; --j) { double w = roots[j]; roots[j] = roots[j - 1]; roots[j - 1] = w; }
+  return count;
+}
+
+bool torus(dvec3 ow, double r, dvec3 dw, double tmin, double tmax, out double t, out dvec3 n) {
+  t = 0.0LF; n = dvec3(0.0LF);
+  double dl = len(dw);
+  precise dvec3 d = dvec3(dw.x / dl, dw.y / dl, dw.z / dl);
+  precise dvec3 o = dvec3(ow.x / r, ow.y / r, ow.z / r);
+  double bh = dotp(o, d);
+  precise dvec3 f = dvec3(o.x - d.x * bh, o.y - d.y * bh, o.z - d.z * bh);
+  precise double cc = dotp(o, o) - 1.0LF;
+  precise double disc = 1.0LF - dotp(f, f);
+  double s0, s1;
+  if (quadratic_roots(1.0LF, bh, cc, disc, s0, s1) == 0) return false;
+  double shift = s0;
+  precise dvec3 q = dvec3(o.x + d.x * shift, o.y + d.y * shift, o.z + d.z * shift);
+  precise double rr = kTorusMajor * kTorusMajor;
+  double dd = dotp(d, d);
+  double nn = dotp(q, d);
+  precise double k = dotp(q, q) + rr - kTorusMinor * kTorusMinor;
+  precise double g = d.x * d.x + d.y * d.y;
+  precise double h = q.x * d.x + q.y * d.y;
+  precise double qx = q.x * q.x + q.y * q.y;
+  precise double a4 = dd * dd;
+  precise double c3 = 4.0LF * dd * nn / a4;
+  precise double c2 = (4.0LF * nn * nn + 2.0LF * dd * k - 4.0LF * rr * g) / a4;
+  precise double c1 = (4.0LF * nn * k - 8.0LF * rr * h) / a4;
+  precise double c0 = (k * k - 4.0LF * rr * qx) / a4;
+  double roots[4];
+  int count = solve_quartic(c3, c2, c1, c0, roots);
+  precise double scale = r / dl;
+  for (int i = 0; i < count; ++i) {
+    precise double ti = (shift + roots[i]) * scale;
+    if (!(ti > tmin && ti < tmax)) continue;
+    precise dvec3 x = dvec3(q.x + d.x * roots[i], q.y + d.y * roots[i], q.z + d.z * roots[i]);
+    if (!(abs(torus_implicit(x)) <= kTorusResidual)) continue;
+    precise double rho = sqrt(x.x * x.x + x.y * x.y);
+    precise dvec3 core = dvec3(kTorusMajor * x.x / rho, kTorusMajor * x.y / rho, 0.0LF);
+    precise dvec3 w = dvec3(x.x - core.x, x.y - core.y, x.z - core.z);
+    t = ti; n = nrm(w);
+    return true;
+  }
+  return false;
+}
+
+bool intersect(uint shape, dvec3 o, double r, dvec3 d, double tmin, double tmax, out double t, out dvec3 n) {
+  t = 0.0LF; n = dvec3(0.0LF);
+  if (shape == 0u) return sphere(o, r, d, tmin, tmax, t, n);
+  if (shape == 1u) return torus(o, r, d, tmin, tmax, t, n);
+  if (shape >= 2u && shape <= 4u) return polytope(shape, o, r, d, tmin, tmax, t, n);
+  if (shape == 5u) return cylinder(o, r, d, tmin, tmax, t, n);
+  return false;
+}
+
+void main() {
+  uint x = gl_GlobalInvocationID.x, y = p.y0 + gl_GlobalInvocationID.y;
+  if (x >= p.width || gl_GlobalInvocationID.y >= p.rows) return;
+  dvec3 pos = dvec3(cam[0], cam[1], cam[2]);
+  dvec3 right = dvec3(cam[3], cam[4], cam[5]);
+  dvec3 up = dvec3(cam[6], cam[7], cam[8]);
+  dvec3 fwd = dvec3(cam[9], cam[10], cam[11]);
+  double focal = cam[12];
+  precise double sx = ((double(x) + 0.5LF) - double(p.width) * 0.5LF) / focal;
+  precise double sy = (double(p.height) * 0.5LF - (double(y) + 0.5LF)) / focal;
+  precise dvec3 dir = dvec3(fwd.x + right.x * sx + up.x * sy, fwd.y + right.y * sx + up.y * sy,
+                            fwd.z + right.z * sx + up.z * sy);
+  dvec3 d = nrm(dir);
+  double best = inf();
+  dvec3 color = dvec3(0.0LF);
+  int owner = -1;
+  uint tile = (y / 16u) * p.tiles_x + x / 16u;
+  for (uint k = tile_ptr[tile]; k < tile_ptr[tile + 1u]; ++k) {
+    uint i = tile_item[k];
+    int x0 = meta[i * 8u], y0 = meta[i * 8u + 1u], x1 = meta[i * 8u + 2u], y1 = meta[i * 8u + 3u];
+    if (int(x) < x0 || int(x) >= x1 || int(y) < y0 || int(y) >= y1) continue;
+    precise dvec3 o = dvec3(pos.x - geo[i * 8u], pos.y - geo[i * 8u + 1u], pos.z - geo[i * 8u + 2u]);
+    double t; dvec3 n;
+    if (!intersect(uint(meta[i * 8u + 5u]), o, geo[i * 8u + 3u], d, kNear, best, t, n)) continue;
+    best = t;
+    precise double l = -dotp(n, d);
+    precise double lit = 0.25LF + 0.75LF * (0.0LF < l ? l : 0.0LF);
+    color = dvec3(geo[i * 8u + 4u] * lit, geo[i * 8u + 5u] * lit, geo[i * 8u + 6u] * lit);
+    owner = meta[i * 8u + 4u];
+  }
+  uint px = gl_GlobalInvocationID.y * p.width + x;  // within the band
+  out_t[px] = best;
+  out_c[px * 3u] = color.x; out_c[px * 3u + 1u] = color.y; out_c[px * 3u + 2u] = color.z;
+  out_owner[px] = owner;
+}
+)";
+
+template <class T>
+std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
+  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
+}
+
+}  // namespace
+
+Result<ImpostorPass> ImpostorPass::build(Context& ctx) {
+  ImpostorPass pass;
+  pass.ctx_ = &ctx;
+  R1_ASSIGN(pass.pipeline_, ctx.compute_compile(kImpostors, "impostors"));
+  return pass;
+}
+
+Status ImpostorPass::reserve(std::size_t which, std::size_t bytes) {
+  std::uint32_t& id = buffers_[which];
+  if (id != 0 && ctx_->buffer_size(id) >= bytes) return Status::ok();
+  ctx_->buffer_release(id);
+  id = 0;
+  // A quarter more than asked, so that a growing frame does not reallocate every time.
+  const std::size_t slack = std::max(bytes, std::min(bytes + bytes / 4, ctx_->info().max_buffer));
+  R1_ASSIGN(id, ctx_->buffer_create(std::max<std::size_t>(slack, 16)));
+  return Status::ok();
+}
+
+Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorItem> items, std::span<double> t,
+                          std::span<Vec3> color, std::span<std::int64_t> owner) {
+  const std::size_t pixels = std::size_t{cam.width} * cam.height;
+  if (cam.width == 0 || cam.height == 0 || t.size() != pixels || color.size() != pixels || owner.size() != pixels)
+    return Status::input("vulkan impostors: the layer is not " + std::to_string(cam.width) + " x " + std::to_string(cam.height));
+  if (items.size() >= 0x7fffffffu) return Status::input("vulkan impostors: " + std::to_string(items.size()) + " impostors: 2^31 - 1 at most");
+  std::fill(t.begin(), t.end(), std::numeric_limits<double>::infinity());
+  std::fill(color.begin(), color.end(), Vec3{});
+  std::fill(owner.begin(), owner.end(), -1);
+  if (items.empty()) return Status::ok();
+  // Bin the impostors into 16-pixel tiles by their rectangles, each tile's list in item order.
+  const std::uint32_t tiles_x = (cam.width + kTile - 1) / kTile, tiles_y = (cam.height + kTile - 1) / kTile;
+  std::vector<std::uint32_t> ptr(std::size_t{tiles_x} * tiles_y + 1, 0);
+  std::vector<double> geo(items.size() * 8, 0.0);
+  std::vector<std::int32_t> meta(items.size() * 8, 0);
+  const auto tiles_of = [&](const ImpostorItem& it, auto&& fn) {
+    const int x0 = std::max(it.x0, 0), y0 = std::max(it.y0, 0);
+    const int x1 = std::min<int>(it.x1, static_cast<int>(cam.width)), y1 = std::min<int>(it.y1, static_cast<int>(cam.height));
+    if (x0 >= x1 || y0 >= y1) return;
+    for (int ty = y0 / kTile; ty <= (y1 - 1) / kTile; ++ty)
+      for (int tx = x0 / kTile; tx <= (x1 - 1) / kTile; ++tx) fn(static_cast<std::size_t>(ty) * tiles_x + static_cast<std::size_t>(tx));
+  };
+  std::uint64_t entries = 0;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const ImpostorItem& it = items[i];
+    const double g[8] = {it.center.x, it.center.y, it.center.z, it.radius, it.color.x, it.color.y, it.color.z, 0.0};
+    std::copy(g, g + 8, geo.begin() + static_cast<std::ptrdiff_t>(i * 8));
+    const std::int32_t m[8] = {it.x0, it.y0, it.x1, it.y1, static_cast<std::int32_t>(it.particle), static_cast<std::int32_t>(it.shape), 0, 0};
+    std::copy(m, m + 8, meta.begin() + static_cast<std::ptrdiff_t>(i * 8));
+    tiles_of(it, [&](std::size_t k) { ++ptr[k + 1], ++entries; });
+  }
+  if (entries >= 0xffffffffu) return Status::input("vulkan impostors: " + std::to_string(entries) + " tile entries: 2^32 - 1 at most");
+  for (std::size_t k = 1; k < ptr.size(); ++k) ptr[k] += ptr[k - 1];
+  std::vector<std::uint32_t> list(entries), fill(ptr.begin(), ptr.end() - 1);
+  for (std::size_t i = 0; i < items.size(); ++i) tiles_of(items[i], [&](std::size_t k) { list[fill[k]++] = static_cast<std::uint32_t>(i); });
+  const double camera[16] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z,
+                             cam.up.x,       cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z,
+                             cam.focal_px,   0,              0,              0};
+  R1_TRY(reserve(0, geo.size() * sizeof(double)));
+  R1_TRY(reserve(1, meta.size() * sizeof(std::int32_t)));
+  R1_TRY(reserve(2, ptr.size() * sizeof(std::uint32_t)));
+  R1_TRY(reserve(3, list.size() * sizeof(std::uint32_t)));
+  // The image in bands of rows whose colour output fits one storage buffer.
+  const std::size_t max_rows = std::max<std::size_t>(1, ctx_->info().max_buffer / (std::size_t{cam.width} * 3 * sizeof(double)));
+  const std::size_t band_rows = std::min<std::size_t>(cam.height, max_rows);
+  const std::size_t band_pixels = band_rows * cam.width;
+  R1_TRY(reserve(4, band_pixels * sizeof(double)));
+  R1_TRY(reserve(5, band_pixels * 3 * sizeof(double)));
+  R1_TRY(reserve(6, band_pixels * sizeof(std::int32_t)));
+  R1_TRY(reserve(7, sizeof camera));
+  R1_TRY(ctx_->buffer_write(buffers_[0], bytes_of(std::span<const double>(geo)), 0));
+  R1_TRY(ctx_->buffer_write(buffers_[1], bytes_of(std::span<const std::int32_t>(meta)), 0));
+  R1_TRY(ctx_->buffer_write(buffers_[2], bytes_of(std::span<const std::uint32_t>(ptr)), 0));
+  R1_TRY(ctx_->buffer_write(buffers_[3], bytes_of(std::span<const std::uint32_t>(list)), 0));
+  R1_TRY(ctx_->buffer_write(buffers_[7], bytes_of(std::span<const double>(camera)), 0));
+  Slot slots[8];
+  for (std::uint32_t b = 0; b < 8; ++b) slots[b] = {b, buffers_[b]};
+  for (std::size_t y0 = 0; y0 < cam.height; y0 += band_rows) {
+    const std::size_t rows = std::min<std::size_t>(band_rows, cam.height - y0), n = rows * cam.width, at = y0 * cam.width;
+    const std::uint32_t push[5] = {cam.width, cam.height, tiles_x, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows)};
+    std::uint8_t push_bytes[sizeof push];
+    std::memcpy(push_bytes, push, sizeof push);
+    R1_TRY(ctx_->dispatch(pipeline_, slots, {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));
+    R1_ASSIGN(const auto tb, ctx_->buffer_read(buffers_[4], 0, n * sizeof(double)));
+    R1_ASSIGN(const auto cb, ctx_->buffer_read(buffers_[5], 0, n * 3 * sizeof(double)));
+    R1_ASSIGN(const auto ob, ctx_->buffer_read(buffers_[6], 0, n * sizeof(std::int32_t)));
+    std::memcpy(t.data() + at, tb.data(), tb.size());
+    for (std::size_t k = 0; k < n; ++k) {
+      double c[3];
+      std::memcpy(c, cb.data() + k * 24, 24);
+      color[at + k] = {c[0], c[1], c[2]};
+      std::int32_t o = 0;
+      std::memcpy(&o, ob.data() + k * 4, 4);
+      owner[at + k] = o;
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace r1::vk
