@@ -196,9 +196,10 @@ TEST(Backend, NullIsWellFormedButWrong) {
 
 namespace {
 
-// R1-BKD-012..013, R1-BKD-060..063: the Clifford primitives reached through the 13.1 trait are the
-// reference's functions bit for bit, on every device: host memory, and Vulkan (lavapipe in CI).
-// What a device cannot do is an error saying so. A device that does not exist here is skipped
+// R1-BKD-012..013, R1-BKD-060..063, R1-BKD-068: the Clifford primitives reached through the 13.1
+// trait are the reference's functions bit for bit, on every device: host memory, and Vulkan
+// (lavapipe in CI); a device with shaders runs the caller's compute and raster work through the
+// trait. What a device cannot do is an error saying so. A device that does not exist here is skipped
 // with its reason, unless R1_REQUIRE_VULKAN is set (make test sets it on the main build tree).
 class EveryDevice : public testing::TestWithParam<std::string> {};
 
@@ -318,9 +319,61 @@ void main() { uint i = gl_GlobalInvocationID.x; if (i < 100u) y[i] = 2l * x[i] -
   auto bad = dev->shader_compile("void main() { nonsense; }", backends::ShaderStage::kCompute);
   ASSERT_FALSE(bad.is_ok());
   EXPECT_NE(bad.status().message().find("does not compile"), std::string::npos) << bad.status().message();
-  auto vertex = dev->shader_compile(doubler, backends::ShaderStage::kVertex);
-  ASSERT_FALSE(vertex.is_ok());
-  EXPECT_NE(vertex.status().message().find("not available yet"), std::string::npos);
+
+  // Raster through the trait (R1-BKD-068): two instances of a triangle over the whole surface,
+  // the second nearer, so the depth test keeps it; the fragment writes its instance plus a value
+  // from a storage buffer, and its pixel.
+  const std::string vs = R"(#version 460
+layout(location = 0) flat out uint inst;
+void main() {
+  gl_Position = vec4(float((gl_VertexIndex & 1) * 4 - 1), float((gl_VertexIndex >> 1) * 4 - 1), 0.0, 1.0);
+  inst = gl_InstanceIndex;
+}
+)";
+  const std::string fs = R"(#version 460
+layout(std430, binding = 2) readonly buffer K { uint k[]; };
+layout(location = 0) flat in uint inst;
+layout(location = 0) out uvec4 o0;
+layout(location = 1) out uvec4 o1;
+layout(location = 2) out uvec4 o2;
+void main() {
+  gl_FragDepth = 0.5 - 0.25 * float(inst);
+  o0 = uvec4(inst + k[0], uint(gl_FragCoord.x), uint(gl_FragCoord.y), 7u);
+  o1 = uvec4(inst);
+  o2 = uvec4(0u);
+}
+)";
+  auto v = dev->shader_compile(vs, backends::ShaderStage::kVertex);
+  auto f = dev->shader_compile(fs, backends::ShaderStage::kFragment);
+  ASSERT_TRUE(v.is_ok() && f.is_ok()) << v.status().message() << " " << f.status().message();
+  EXPECT_FALSE(dev->shader_compile("#version 460\nvoid main() { nonsense; }", backends::ShaderStage::kFragment).is_ok());
+  EXPECT_FALSE(dev->pipeline_create({*shader, *f}, {}).is_ok());  // a compute shader is no vertex shader
+  auto pipeline = dev->pipeline_create({*v, *f}, {{2}});
+  ASSERT_TRUE(pipeline.is_ok()) << pipeline.status().message();
+  const std::uint32_t args[4] = {3, 2, 0, 0}, k[1] = {40};
+  auto ab = dev->buffer_create(16, backends::BufferUsage::kIndirect), kb = dev->buffer_create(4, backends::BufferUsage::kStorage);
+  ASSERT_TRUE(ab.is_ok() && kb.is_ok());
+  ASSERT_TRUE(dev->buffer_write(*ab, std::span(reinterpret_cast<const std::uint8_t*>(args), 16), 0).is_ok());
+  ASSERT_TRUE(dev->buffer_write(*kb, std::span(reinterpret_cast<const std::uint8_t*>(k), 4), 0).is_ok());
+  const backends::Binding kbind[] = {{2, *kb}};
+  EXPECT_FALSE(dev->draw_indirect(*pipeline, kbind, *ab, 1).is_ok());  // nothing acquired yet
+  ASSERT_TRUE(dev->surface_configure(37, 21).is_ok());
+  auto texture = dev->surface_acquire();
+  ASSERT_TRUE(texture.is_ok()) << texture.status().message();
+  ASSERT_TRUE(dev->draw_indirect(*pipeline, kbind, *ab, 1).is_ok());
+  EXPECT_FALSE(dev->draw_indirect(*pipeline, kbind, *ab, 2).is_ok());  // two records overrun 16 bytes
+  ASSERT_TRUE(dev->surface_present(*texture).is_ok());
+  auto pixels = dev->surface_read(*texture, 0);
+  ASSERT_TRUE(pixels.is_ok()) << pixels.status().message();
+  ASSERT_EQ(pixels->size(), 37u * 21u * 4u);
+  for (std::uint32_t py = 0; py < 21; ++py)
+    for (std::uint32_t px = 0; px < 37; ++px) {
+      const std::uint32_t* p = &(*pixels)[(py * 37 + px) * 4];
+      ASSERT_EQ(p[0], 41u) << px << ", " << py;  // instance 1 (nearer) + 40
+      ASSERT_EQ(p[1], px);
+      ASSERT_EQ(p[2], py);
+      ASSERT_EQ(p[3], 7u);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, EveryDevice, testing::Values("host", "vulkan"),

@@ -9,23 +9,11 @@
 #include <string>
 #include <utility>
 
-#include "r1/accel/vulkan.hpp"
+#include "context_state.hpp"
 
 namespace r1::vk {
 
 namespace {
-
-std::string code(VkResult r) { return "VkResult " + std::to_string(static_cast<int>(r)); }
-
-Status fail(const std::string& what, VkResult r) { return Status::input("vulkan: " + what + " failed (" + code(r) + ")"); }
-
-// A Vulkan structure with its type set and every other member zero.
-template <class T>
-T make(VkStructureType type) {
-  T v{};
-  v.sType = type;
-  return v;
-}
 
 int type_rank(VkPhysicalDeviceType t) {
   switch (t) {
@@ -38,89 +26,6 @@ int type_rank(VkPhysicalDeviceType t) {
 }
 
 }  // namespace
-
-struct Context::State {
-  VkInstance instance = VK_NULL_HANDLE;
-  VkPhysicalDevice physical = VK_NULL_HANDLE;
-  VkDevice device = VK_NULL_HANDLE;
-  VkQueue queue = VK_NULL_HANDLE;
-  std::uint32_t family = 0;
-  VkPhysicalDeviceMemoryProperties memory{};
-  VkPhysicalDeviceLimits limits{};
-  VkCommandPool pool = VK_NULL_HANDLE;
-  VkCommandBuffer cmd = VK_NULL_HANDLE;
-  VkFence fence = VK_NULL_HANDLE;
-  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
-  VkPipelineLayout layout = VK_NULL_HANDLE;
-  VkDescriptorPool descriptors = VK_NULL_HANDLE;
-  DeviceInfo info;
-  struct Buffer {
-    VkBuffer buffer = VK_NULL_HANDLE;
-    VkDeviceMemory memory = VK_NULL_HANDLE;
-    std::uint8_t* mapped = nullptr;
-    std::size_t size = 0;
-  };
-  std::vector<Buffer> buffers;  // buffers[0]: the 16-byte placeholder every unused slot binds
-  std::vector<VkPipeline> pipelines;
-
-  ~State() {
-    if (device != VK_NULL_HANDLE) {
-      vkDeviceWaitIdle(device);
-      for (VkPipeline p : pipelines) vkDestroyPipeline(device, p, nullptr);
-      for (const Buffer& b : buffers) {
-        if (b.buffer == VK_NULL_HANDLE) continue;  // released
-        if (b.memory != VK_NULL_HANDLE) vkUnmapMemory(device, b.memory);
-        vkDestroyBuffer(device, b.buffer, nullptr);
-        vkFreeMemory(device, b.memory, nullptr);
-      }
-      vkDestroyDescriptorPool(device, descriptors, nullptr);
-      vkDestroyPipelineLayout(device, layout, nullptr);
-      vkDestroyDescriptorSetLayout(device, set_layout, nullptr);
-      vkDestroyFence(device, fence, nullptr);
-      vkDestroyCommandPool(device, pool, nullptr);
-      vkDestroyDevice(device, nullptr);
-    }
-    if (instance != VK_NULL_HANDLE) vkDestroyInstance(instance, nullptr);
-  }
-
-  Result<std::uint32_t> make_buffer(std::size_t bytes) {
-    Buffer b;
-    b.size = bytes;
-    auto bi = make<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
-    bi.size = std::max<std::size_t>(bytes, 16);
-    bi.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    if (VkResult r = vkCreateBuffer(device, &bi, nullptr, &b.buffer); r != VK_SUCCESS) return fail("vkCreateBuffer", r);
-    VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(device, b.buffer, &req);
-    const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    std::uint32_t type = memory.memoryTypeCount;
-    for (std::uint32_t t = 0; t < memory.memoryTypeCount && type == memory.memoryTypeCount; ++t)
-      if ((req.memoryTypeBits & (1u << t)) && (memory.memoryTypes[t].propertyFlags & want) == want) type = t;
-    if (type == memory.memoryTypeCount) {
-      vkDestroyBuffer(device, b.buffer, nullptr);
-      return Status::input("vulkan: no host-visible coherent memory for a storage buffer");
-    }
-    auto ai = make<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
-    ai.allocationSize = req.size;
-    ai.memoryTypeIndex = type;
-    if (VkResult r = vkAllocateMemory(device, &ai, nullptr, &b.memory); r != VK_SUCCESS) {
-      vkDestroyBuffer(device, b.buffer, nullptr);
-      return fail("vkAllocateMemory of " + std::to_string(req.size) + " bytes", r);
-    }
-    vkBindBufferMemory(device, b.buffer, b.memory, 0);
-    void* p = nullptr;
-    if (VkResult r = vkMapMemory(device, b.memory, 0, VK_WHOLE_SIZE, 0, &p); r != VK_SUCCESS) {
-      vkDestroyBuffer(device, b.buffer, nullptr);
-      vkFreeMemory(device, b.memory, nullptr);
-      return fail("vkMapMemory", r);
-    }
-    b.mapped = static_cast<std::uint8_t*>(p);
-    std::memset(b.mapped, 0, bi.size);
-    buffers.push_back(b);
-    return static_cast<std::uint32_t>(buffers.size() - 1);
-  }
-};
 
 Context::Context(std::unique_ptr<State> s) : s_(std::move(s)) {}
 Context::~Context() = default;
@@ -144,6 +49,7 @@ Result<std::unique_ptr<Context>> Context::create() {
     VkPhysicalDevice d;
     std::uint32_t family;
     int rank;
+    bool graphics;
   };
   std::vector<Candidate> usable;
   std::string why;
@@ -165,14 +71,18 @@ Result<std::unique_ptr<Context>> Context::create() {
     vkGetPhysicalDeviceQueueFamilyProperties(d, &nf, nullptr);
     std::vector<VkQueueFamilyProperties> fam(nf);
     vkGetPhysicalDeviceQueueFamilyProperties(d, &nf, fam.data());
+    // A family with graphics and compute when there is one (the raster passes need both), else compute.
     std::uint32_t family = nf;
     for (std::uint32_t q = 0; q < nf && family == nf; ++q)
+      if ((fam[q].queueFlags & (VK_QUEUE_COMPUTE_BIT | VK_QUEUE_GRAPHICS_BIT)) == (VK_QUEUE_COMPUTE_BIT | VK_QUEUE_GRAPHICS_BIT)) family = q;
+    for (std::uint32_t q = 0; q < nf && family == nf; ++q)
       if (fam[q].queueFlags & VK_QUEUE_COMPUTE_BIT) family = q;
+    const bool graphics = family < nf && (fam[family].queueFlags & VK_QUEUE_GRAPHICS_BIT) != 0;
     if (family == nf) {
       why += "; " + name + ": no compute queue";
       continue;
     }
-    usable.push_back({d, family, type_rank(p.deviceType)});
+    usable.push_back({d, family, type_rank(p.deviceType), graphics});
   }
   std::stable_sort(usable.begin(), usable.end(), [](const Candidate& a, const Candidate& b) { return a.rank < b.rank; });
   if (usable.empty())
@@ -188,6 +98,7 @@ Result<std::unique_ptr<Context>> Context::create() {
   }
   s->physical = usable[pick].d;
   s->family = usable[pick].family;
+  s->info.graphics = usable[pick].graphics;
   {
     auto driver = make<VkPhysicalDeviceDriverProperties>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES);
     auto p2 = make<VkPhysicalDeviceProperties2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2);
@@ -207,13 +118,23 @@ Result<std::unique_ptr<Context>> Context::create() {
   qi.queueFamilyIndex = s->family;
   qi.queueCount = 1;
   qi.pQueuePriorities = &priority;
-  VkPhysicalDeviceFeatures features{};
-  features.shaderFloat64 = VK_TRUE;
-  features.shaderInt64 = VK_TRUE;
+  // 64-bit floats and integers; dynamic rendering (core in 1.3) for the raster passes.
+  auto v13 = make<VkPhysicalDeviceVulkan13Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES);
+  auto features = make<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
+  features.pNext = &v13;
+  vkGetPhysicalDeviceFeatures2(s->physical, &features);
+  s->info.graphics = s->info.graphics && v13.dynamicRendering == VK_TRUE;
+  const VkBool32 dynamic_rendering = s->info.graphics ? VK_TRUE : VK_FALSE;
+  v13 = make<VkPhysicalDeviceVulkan13Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES);
+  v13.dynamicRendering = dynamic_rendering;
+  features = make<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
+  features.pNext = &v13;
+  features.features.shaderFloat64 = VK_TRUE;
+  features.features.shaderInt64 = VK_TRUE;
   auto di = make<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
+  di.pNext = &features;
   di.queueCreateInfoCount = 1;
   di.pQueueCreateInfos = &qi;
-  di.pEnabledFeatures = &features;
   if (VkResult r = vkCreateDevice(s->physical, &di, nullptr, &s->device); r != VK_SUCCESS) return fail("vkCreateDevice", r);
   vkGetDeviceQueue(s->device, s->family, 0, &s->queue);
 
@@ -234,14 +155,14 @@ Result<std::unique_ptr<Context>> Context::create() {
     bindings[i].binding = i;
     bindings[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     bindings[i].descriptorCount = 1;
-    bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    bindings[i].stageFlags = s->stages();
   }
   auto dl = make<VkDescriptorSetLayoutCreateInfo>(VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO);
   dl.bindingCount = kSlots;
   dl.pBindings = bindings.data();
   if (VkResult r = vkCreateDescriptorSetLayout(s->device, &dl, nullptr, &s->set_layout); r != VK_SUCCESS)
     return fail("vkCreateDescriptorSetLayout", r);
-  VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushBytes};
+  VkPushConstantRange push{s->stages(), 0, kPushBytes};
   auto pl = make<VkPipelineLayoutCreateInfo>(VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO);
   pl.setLayoutCount = 1;
   pl.pSetLayouts = &s->set_layout;
@@ -300,68 +221,8 @@ Result<std::vector<std::uint8_t>> Context::buffer_read(std::uint32_t id, std::si
   return std::vector<std::uint8_t>(b.mapped + offset, b.mapped + offset + size);
 }
 
-Result<std::uint32_t> Context::compute_compile(std::string_view glsl, std::string_view name) {
-  // Without a #version line glslang falls back to a profile whose built-ins it cannot parse and
-  // prints them all: refuse such a source before it gets there.
-  const std::size_t first = glsl.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos || glsl.substr(first, 8) != "#version")
-    return Status::input("vulkan: shader " + std::string(name) + " does not compile: it must begin with a #version line (GLSL 4.60)");
-  shaderc_compiler_t compiler = shaderc_compiler_initialize();
-  shaderc_compile_options_t options = shaderc_compile_options_initialize();
-  if (compiler == nullptr || options == nullptr) {
-    shaderc_compile_options_release(options);
-    shaderc_compiler_release(compiler);
-    return Status::internal("vulkan: shaderc did not initialise");
-  }
-  shaderc_compile_options_set_target_env(options, shaderc_target_env_vulkan, shaderc_env_version_vulkan_1_3);
-  shaderc_compile_options_set_optimization_level(options, shaderc_optimization_level_zero);
-  const std::string label(name);
-  shaderc_compilation_result_t result =
-      shaderc_compile_into_spv(compiler, glsl.data(), glsl.size(), shaderc_compute_shader, label.c_str(), "main", options);
-  shaderc_compile_options_release(options);
-  shaderc_compiler_release(compiler);
-  if (shaderc_result_get_compilation_status(result) != shaderc_compilation_status_success) {
-    std::string message = shaderc_result_get_error_message(result);
-    shaderc_result_release(result);
-    while (!message.empty() && message.back() == '\n') message.pop_back();
-    for (char& c : message)
-      if (c == '\n') c = ' ';
-    return Status::input("vulkan: shader " + label + " does not compile: " + message);
-  }
-  const std::size_t bytes = shaderc_result_get_length(result);
-  std::vector<std::uint32_t> words(bytes / 4);
-  std::memcpy(words.data(), shaderc_result_get_bytes(result), words.size() * 4);
-  shaderc_result_release(result);
-
-  auto mi = make<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
-  mi.codeSize = words.size() * 4;
-  mi.pCode = words.data();
-  VkShaderModule module = VK_NULL_HANDLE;
-  if (VkResult r = vkCreateShaderModule(s_->device, &mi, nullptr, &module); r != VK_SUCCESS) return fail("vkCreateShaderModule", r);
-  auto ci = make<VkComputePipelineCreateInfo>(VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO);
-  ci.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-  ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  ci.stage.module = module;
-  ci.stage.pName = "main";
-  ci.layout = s_->layout;
-  VkPipeline pipeline = VK_NULL_HANDLE;
-  const VkResult r = vkCreateComputePipelines(s_->device, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline);
-  vkDestroyShaderModule(s_->device, module, nullptr);
-  if (r != VK_SUCCESS) return fail("vkCreateComputePipelines for " + label, r);
-  s_->pipelines.push_back(pipeline);
-  return static_cast<std::uint32_t>(s_->pipelines.size() - 1);
-}
-
-Status Context::dispatch(std::uint32_t pipeline, std::span<const Slot> slots, std::array<std::uint32_t, 3> groups,
-                         std::span<const std::uint8_t> push) {
-  State& s = *s_;
-  if (pipeline >= s.pipelines.size()) return Status::input("vulkan: no pipeline " + std::to_string(pipeline));
-  if (push.size() > kPushBytes || push.size() % 4 != 0)
-    return Status::input("vulkan: " + std::to_string(push.size()) + " push-constant bytes (a multiple of 4, at most 128)");
-  for (std::size_t a = 0; a < 3; ++a)
-    if (groups[a] > s.limits.maxComputeWorkGroupCount[a])
-      return Status::input("vulkan: " + std::to_string(groups[a]) + " workgroups on axis " + std::to_string(a) + " exceed the device's " +
-                           std::to_string(s.limits.maxComputeWorkGroupCount[a]));
+Result<VkDescriptorSet> Context::State::bind(std::span<const Slot> slots) {
+  State& s = *this;
   // Every slot bound: the placeholder where the caller names no buffer.
   std::array<VkDescriptorBufferInfo, kSlots> infos{};
   for (auto& i : infos) i = {s.buffers[0].buffer, 0, VK_WHOLE_SIZE};
@@ -387,27 +248,107 @@ Status Context::dispatch(std::uint32_t pipeline, std::span<const Slot> slots, st
     writes[i].pBufferInfo = &infos[i];
   }
   vkUpdateDescriptorSets(s.device, kSlots, writes.data(), 0, nullptr);
+  return set;
+}
 
+Result<std::vector<std::uint32_t>> Context::State::spirv(std::string_view glsl, shaderc_shader_kind kind, std::string_view name) {
+  // Without a #version line glslang falls back to a profile whose built-ins it cannot parse and
+  // prints them all: refuse such a source before it gets there.
+  const std::size_t first = glsl.find_first_not_of(" \t\r\n");
+  if (first == std::string_view::npos || glsl.substr(first, 8) != "#version")
+    return Status::input("vulkan: shader " + std::string(name) + " does not compile: it must begin with a #version line (GLSL 4.60)");
+  shaderc_compiler_t compiler = shaderc_compiler_initialize();
+  shaderc_compile_options_t options = shaderc_compile_options_initialize();
+  if (compiler == nullptr || options == nullptr) {
+    shaderc_compile_options_release(options);
+    shaderc_compiler_release(compiler);
+    return Status::internal("vulkan: shaderc did not initialise");
+  }
+  shaderc_compile_options_set_target_env(options, shaderc_target_env_vulkan, shaderc_env_version_vulkan_1_3);
+  shaderc_compile_options_set_optimization_level(options, shaderc_optimization_level_zero);
+  const std::string label(name);
+  shaderc_compilation_result_t result =
+      shaderc_compile_into_spv(compiler, glsl.data(), glsl.size(), kind, label.c_str(), "main", options);
+  shaderc_compile_options_release(options);
+  shaderc_compiler_release(compiler);
+  if (shaderc_result_get_compilation_status(result) != shaderc_compilation_status_success) {
+    std::string message = shaderc_result_get_error_message(result);
+    shaderc_result_release(result);
+    while (!message.empty() && message.back() == '\n') message.pop_back();
+    for (char& c : message)
+      if (c == '\n') c = ' ';
+    return Status::input("vulkan: shader " + label + " does not compile: " + message);
+  }
+  const std::size_t bytes = shaderc_result_get_length(result);
+  std::vector<std::uint32_t> words(bytes / 4);
+  std::memcpy(words.data(), shaderc_result_get_bytes(result), words.size() * 4);
+  shaderc_result_release(result);
+  return words;
+}
+
+Result<std::uint32_t> Context::compute_compile(std::string_view glsl, std::string_view name) {
+  R1_ASSIGN(const std::vector<std::uint32_t> words, s_->spirv(glsl, shaderc_compute_shader, name));
+  const std::string label(name);
+  auto mi = make<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
+  mi.codeSize = words.size() * 4;
+  mi.pCode = words.data();
+  VkShaderModule module = VK_NULL_HANDLE;
+  if (VkResult r = vkCreateShaderModule(s_->device, &mi, nullptr, &module); r != VK_SUCCESS) return fail("vkCreateShaderModule", r);
+  auto ci = make<VkComputePipelineCreateInfo>(VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO);
+  ci.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+  ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  ci.stage.module = module;
+  ci.stage.pName = "main";
+  ci.layout = s_->layout;
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  const VkResult r = vkCreateComputePipelines(s_->device, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline);
+  vkDestroyShaderModule(s_->device, module, nullptr);
+  if (r != VK_SUCCESS) return fail("vkCreateComputePipelines for " + label, r);
+  s_->pipelines.push_back(pipeline);
+  s_->graphics_pipeline.push_back(false);
+  return static_cast<std::uint32_t>(s_->pipelines.size() - 1);
+}
+
+Status Context::dispatch(std::uint32_t pipeline, std::span<const Slot> slots, std::array<std::uint32_t, 3> groups,
+                         std::span<const std::uint8_t> push) {
+  State& s = *s_;
+  if (pipeline >= s.pipelines.size() || s.graphics_pipeline[pipeline])
+    return Status::input("vulkan: no compute pipeline " + std::to_string(pipeline));
+  if (push.size() > kPushBytes || push.size() % 4 != 0)
+    return Status::input("vulkan: " + std::to_string(push.size()) + " push-constant bytes (a multiple of 4, at most 128)");
+  for (std::size_t a = 0; a < 3; ++a)
+    if (groups[a] > s.limits.maxComputeWorkGroupCount[a])
+      return Status::input("vulkan: " + std::to_string(groups[a]) + " workgroups on axis " + std::to_string(a) + " exceed the device's " +
+                           std::to_string(s.limits.maxComputeWorkGroupCount[a]));
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  R1_ASSIGN(set, s.bind(slots));
+
+  return s.submit([&](VkCommandBuffer cmd) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.pipelines[pipeline]);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.layout, 0, 1, &set, 0, nullptr);
+    if (!push.empty()) vkCmdPushConstants(cmd, s.layout, s.stages(), 0, static_cast<std::uint32_t>(push.size()), push.data());
+    vkCmdDispatch(cmd, groups[0], groups[1], groups[2]);
+    // The shader's writes, visible to the host's reads of the mapped memory.
+    auto barrier = make<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
+  });
+}
+
+Status Context::State::submit(const std::function<void(VkCommandBuffer)>& record) {
   auto bi = make<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  if (VkResult r = vkBeginCommandBuffer(s.cmd, &bi); r != VK_SUCCESS) return fail("vkBeginCommandBuffer", r);
-  vkCmdBindPipeline(s.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.pipelines[pipeline]);
-  vkCmdBindDescriptorSets(s.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.layout, 0, 1, &set, 0, nullptr);
-  if (!push.empty()) vkCmdPushConstants(s.cmd, s.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, static_cast<std::uint32_t>(push.size()), push.data());
-  vkCmdDispatch(s.cmd, groups[0], groups[1], groups[2]);
-  // The shader's writes, visible to the host's reads of the mapped memory.
-  auto barrier = make<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
-  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  vkCmdPipelineBarrier(s.cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
-  if (VkResult r = vkEndCommandBuffer(s.cmd); r != VK_SUCCESS) return fail("vkEndCommandBuffer", r);
+  if (VkResult r = vkBeginCommandBuffer(cmd, &bi); r != VK_SUCCESS) return fail("vkBeginCommandBuffer", r);
+  record(cmd);
+  if (VkResult r = vkEndCommandBuffer(cmd); r != VK_SUCCESS) return fail("vkEndCommandBuffer", r);
   auto si = make<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
   si.commandBufferCount = 1;
-  si.pCommandBuffers = &s.cmd;
-  if (VkResult r = vkQueueSubmit(s.queue, 1, &si, s.fence); r != VK_SUCCESS) return fail("vkQueueSubmit", r);
-  const VkResult w = vkWaitForFences(s.device, 1, &s.fence, VK_TRUE, UINT64_MAX);
-  vkResetFences(s.device, 1, &s.fence);
-  vkResetCommandBuffer(s.cmd, 0);
+  si.pCommandBuffers = &cmd;
+  if (VkResult r = vkQueueSubmit(queue, 1, &si, fence); r != VK_SUCCESS) return fail("vkQueueSubmit", r);
+  const VkResult w = vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX);
+  vkResetFences(device, 1, &fence);
+  vkResetCommandBuffer(cmd, 0);
   if (w != VK_SUCCESS) return fail("vkWaitForFences", w);
   return Status::ok();
 }

@@ -5,6 +5,7 @@
 // torus's resolvent cubic starts from fp32 estimates of them and reaches its root by the
 // reference's Newton steps in fp64.
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -19,10 +20,10 @@ namespace {
 
 constexpr int kTile = 16;
 
-// Bindings: 0 geometry (8 doubles an impostor: centre, radius, colour, 0), 1 meta (8 ints:
-// rectangle x0 y0 x1 y1, particle, shape, 0, 0), 2 tile offsets, 3 tile items, 4 t, 5 colour
-// (3 doubles a pixel), 6 owner, 7 camera (position, right, up, forward, focal_px).
-constexpr const char* kImpostors = R"(#version 460
+// The compute pass's bindings: 0 geometry (8 doubles an impostor: centre, radius, colour, 0),
+// 1 meta (8 ints: rectangle x0 y0 x1 y1, particle, shape, 0, 0), 2 tile offsets, 3 tile items,
+// 4 t, 5 colour (3 doubles a pixel), 6 owner, 7 camera (position, right, up, forward, focal_px).
+constexpr const char* kComputeHeader = R"(#version 460
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, binding = 0) readonly buffer G { double geo[]; };
 layout(std430, binding = 1) readonly buffer M { int meta[]; };
@@ -33,7 +34,57 @@ layout(std430, binding = 5) writeonly buffer OC { double out_c[]; };
 layout(std430, binding = 6) writeonly buffer OO { int out_owner[]; };
 layout(std430, binding = 7) readonly buffer CAM { double cam[]; };
 layout(push_constant) uniform P { uint width; uint height; uint tiles_x; uint y0; uint rows; } p;
+)";
 
+// The raster pass's bindings: 0 geometry and 1 meta as above, 2 the instances (item indices in
+// draw order), 7 camera. The vertex shader makes the quad of the item's rectangle; the fragment
+// shader casts the pixel's ray at the item and writes (t, owner), colour r g, colour b as the
+// words of doubles, and depth t / (2 t_far).
+constexpr const char* kRasterBindings = R"(#version 460
+layout(std430, binding = 0) readonly buffer G { double geo[]; };
+layout(std430, binding = 1) readonly buffer M { int meta[]; };
+layout(std430, binding = 2) readonly buffer L { uint instance_item[]; };
+layout(std430, binding = 7) readonly buffer CAM { double cam[]; };
+layout(push_constant) uniform P { uint width; uint height; float depth_scale; } p;
+)";
+
+constexpr const char* kVertexMain = R"(
+layout(location = 0) flat out uint item;
+void main() {
+  uint i = instance_item[gl_InstanceIndex];
+  int v = gl_VertexIndex;
+  bool right = v == 1 || v == 3 || v == 4;
+  bool below = v == 2 || v == 4 || v == 5;
+  float x = float(right ? meta[i * 8u + 2u] : meta[i * 8u]);
+  float y = float(below ? meta[i * 8u + 3u] : meta[i * 8u + 1u]);
+  gl_Position = vec4(2.0 * x / float(p.width) - 1.0, 2.0 * y / float(p.height) - 1.0, 0.0, 1.0);
+  item = i;
+}
+)";
+
+constexpr const char* kFragmentMain = R"(
+layout(location = 0) flat in uint item;
+layout(location = 0) out uvec4 out0;
+layout(location = 1) out uvec4 out1;
+layout(location = 2) out uvec4 out2;
+void main() {
+  uint x = uint(gl_FragCoord.x), y = uint(gl_FragCoord.y);
+  dvec3 d = pixel_dir(x, y, p.width, p.height);
+  uint i = item;
+  precise dvec3 o = dvec3(cam[0] - geo[i * 8u], cam[1] - geo[i * 8u + 1u], cam[2] - geo[i * 8u + 2u]);
+  double t; dvec3 n;
+  if (!intersect(uint(meta[i * 8u + 5u]), o, geo[i * 8u + 3u], d, kNear, inf(), t, n)) discard;
+  dvec3 c = shade(i, n, d);
+  gl_FragDepth = float(t) * p.depth_scale;
+  out0 = uvec4(unpackDouble2x32(t), uint(meta[i * 8u + 4u]), 0u);
+  out1 = uvec4(unpackDouble2x32(c.x), unpackDouble2x32(c.y));
+  out2 = uvec4(unpackDouble2x32(c.z), 0u, 0u);
+}
+)";
+
+// The reference's ray-shape intersections (shapes.cpp) and the pixel ray (view.cpp), shared by
+// the compute and raster passes.
+constexpr const char* kShapes = R"(
 const double kInvSqrt3 = 0.57735026918962576450914878050196LF;
 const double kInvSqrt2 = 0.70710678118654752440084436210485LF;
 const double kTorusMajor = 0.65LF;
@@ -307,19 +358,33 @@ bool intersect(uint shape, dvec3 o, double r, dvec3 d, double tmin, double tmax,
   return false;
 }
 
-void main() {
-  uint x = gl_GlobalInvocationID.x, y = p.y0 + gl_GlobalInvocationID.y;
-  if (x >= p.width || gl_GlobalInvocationID.y >= p.rows) return;
-  dvec3 pos = dvec3(cam[0], cam[1], cam[2]);
+
+dvec3 pixel_dir(uint x, uint y, uint width, uint height) {
   dvec3 right = dvec3(cam[3], cam[4], cam[5]);
   dvec3 up = dvec3(cam[6], cam[7], cam[8]);
   dvec3 fwd = dvec3(cam[9], cam[10], cam[11]);
   double focal = cam[12];
-  precise double sx = ((double(x) + 0.5LF) - double(p.width) * 0.5LF) / focal;
-  precise double sy = (double(p.height) * 0.5LF - (double(y) + 0.5LF)) / focal;
+  precise double sx = ((double(x) + 0.5LF) - double(width) * 0.5LF) / focal;
+  precise double sy = (double(height) * 0.5LF - (double(y) + 0.5LF)) / focal;
   precise dvec3 dir = dvec3(fwd.x + right.x * sx + up.x * sy, fwd.y + right.y * sx + up.y * sy,
                             fwd.z + right.z * sx + up.z * sy);
-  dvec3 d = nrm(dir);
+  return nrm(dir);
+}
+
+dvec3 shade(uint i, dvec3 n, dvec3 d) {
+  precise double l = -dotp(n, d);
+  precise double lit = 0.25LF + 0.75LF * (0.0LF < l ? l : 0.0LF);
+  precise dvec3 c = dvec3(geo[i * 8u + 4u] * lit, geo[i * 8u + 5u] * lit, geo[i * 8u + 6u] * lit);
+  return c;
+}
+)";
+
+constexpr const char* kComputeMain = R"(
+void main() {
+  uint x = gl_GlobalInvocationID.x, y = p.y0 + gl_GlobalInvocationID.y;
+  if (x >= p.width || gl_GlobalInvocationID.y >= p.rows) return;
+  dvec3 pos = dvec3(cam[0], cam[1], cam[2]);
+  dvec3 d = pixel_dir(x, y, p.width, p.height);
   double best = inf();
   dvec3 color = dvec3(0.0LF);
   int owner = -1;
@@ -332,9 +397,7 @@ void main() {
     double t; dvec3 n;
     if (!intersect(uint(meta[i * 8u + 5u]), o, geo[i * 8u + 3u], d, kNear, best, t, n)) continue;
     best = t;
-    precise double l = -dotp(n, d);
-    precise double lit = 0.25LF + 0.75LF * (0.0LF < l ? l : 0.0LF);
-    color = dvec3(geo[i * 8u + 4u] * lit, geo[i * 8u + 5u] * lit, geo[i * 8u + 6u] * lit);
+    color = shade(i, n, d);
     owner = meta[i * 8u + 4u];
   }
   uint px = gl_GlobalInvocationID.y * p.width + x;  // within the band
@@ -351,10 +414,16 @@ std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
 
 }  // namespace
 
-Result<ImpostorPass> ImpostorPass::build(Context& ctx) {
+Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
   ImpostorPass pass;
   pass.ctx_ = &ctx;
-  R1_ASSIGN(pass.pipeline_, ctx.compute_compile(kImpostors, "impostors"));
+  pass.mode_ = mode;
+  if (mode == Mode::kCompute) {
+    R1_ASSIGN(pass.pipeline_, ctx.compute_compile(std::string(kComputeHeader) + kShapes + kComputeMain, "impostors"));
+  } else {
+    R1_ASSIGN(pass.pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexMain,
+                                                   std::string(kRasterBindings) + kShapes + kFragmentMain, "impostors"));
+  }
   return pass;
 }
 
@@ -369,6 +438,11 @@ Status ImpostorPass::reserve(std::size_t which, std::size_t bytes) {
   return Status::ok();
 }
 
+Status ImpostorPass::upload(std::size_t which, std::span<const std::uint8_t> bytes) {
+  R1_TRY(reserve(which, bytes.size()));
+  return ctx_->buffer_write(buffers_[which], bytes, 0);
+}
+
 Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorItem> items, std::span<double> t,
                           std::span<Vec3> color, std::span<std::int64_t> owner) {
   const std::size_t pixels = std::size_t{cam.width} * cam.height;
@@ -379,11 +453,29 @@ Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorIte
   std::fill(color.begin(), color.end(), Vec3{});
   std::fill(owner.begin(), owner.end(), -1);
   if (items.empty()) return Status::ok();
+  std::vector<double> geo(items.size() * 8, 0.0);
+  std::vector<std::int32_t> meta(items.size() * 8, 0);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const ImpostorItem& it = items[i];
+    const double g[8] = {it.center.x, it.center.y, it.center.z, it.radius, it.color.x, it.color.y, it.color.z, 0.0};
+    std::copy(g, g + 8, geo.begin() + static_cast<std::ptrdiff_t>(i * 8));
+    const std::int32_t m[8] = {it.x0, it.y0, it.x1, it.y1, static_cast<std::int32_t>(it.particle), static_cast<std::int32_t>(it.shape), 0, 0};
+    std::copy(m, m + 8, meta.begin() + static_cast<std::ptrdiff_t>(i * 8));
+  }
+  const double camera[16] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z,
+                             cam.up.x,       cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z,
+                             cam.focal_px,   0,              0,              0};
+  R1_TRY(upload(0, bytes_of(std::span<const double>(geo))));
+  R1_TRY(upload(1, bytes_of(std::span<const std::int32_t>(meta))));
+  R1_TRY(upload(7, bytes_of(std::span<const double>(camera))));
+  return mode_ == Mode::kCompute ? draw_compute(cam, items, t, color, owner) : draw_raster(cam, items, t, color, owner);
+}
+
+Status ImpostorPass::draw_compute(const ImpostorCamera& cam, std::span<const ImpostorItem> items, std::span<double> t,
+                                  std::span<Vec3> color, std::span<std::int64_t> owner) {
   // Bin the impostors into 16-pixel tiles by their rectangles, each tile's list in item order.
   const std::uint32_t tiles_x = (cam.width + kTile - 1) / kTile, tiles_y = (cam.height + kTile - 1) / kTile;
   std::vector<std::uint32_t> ptr(std::size_t{tiles_x} * tiles_y + 1, 0);
-  std::vector<double> geo(items.size() * 8, 0.0);
-  std::vector<std::int32_t> meta(items.size() * 8, 0);
   const auto tiles_of = [&](const ImpostorItem& it, auto&& fn) {
     const int x0 = std::max(it.x0, 0), y0 = std::max(it.y0, 0);
     const int x1 = std::min<int>(it.x1, static_cast<int>(cam.width)), y1 = std::min<int>(it.y1, static_cast<int>(cam.height));
@@ -392,25 +484,13 @@ Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorIte
       for (int tx = x0 / kTile; tx <= (x1 - 1) / kTile; ++tx) fn(static_cast<std::size_t>(ty) * tiles_x + static_cast<std::size_t>(tx));
   };
   std::uint64_t entries = 0;
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    const ImpostorItem& it = items[i];
-    const double g[8] = {it.center.x, it.center.y, it.center.z, it.radius, it.color.x, it.color.y, it.color.z, 0.0};
-    std::copy(g, g + 8, geo.begin() + static_cast<std::ptrdiff_t>(i * 8));
-    const std::int32_t m[8] = {it.x0, it.y0, it.x1, it.y1, static_cast<std::int32_t>(it.particle), static_cast<std::int32_t>(it.shape), 0, 0};
-    std::copy(m, m + 8, meta.begin() + static_cast<std::ptrdiff_t>(i * 8));
-    tiles_of(it, [&](std::size_t k) { ++ptr[k + 1], ++entries; });
-  }
+  for (const ImpostorItem& it : items) tiles_of(it, [&](std::size_t k) { ++ptr[k + 1], ++entries; });
   if (entries >= 0xffffffffu) return Status::input("vulkan impostors: " + std::to_string(entries) + " tile entries: 2^32 - 1 at most");
   for (std::size_t k = 1; k < ptr.size(); ++k) ptr[k] += ptr[k - 1];
   std::vector<std::uint32_t> list(entries), fill(ptr.begin(), ptr.end() - 1);
   for (std::size_t i = 0; i < items.size(); ++i) tiles_of(items[i], [&](std::size_t k) { list[fill[k]++] = static_cast<std::uint32_t>(i); });
-  const double camera[16] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z,
-                             cam.up.x,       cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z,
-                             cam.focal_px,   0,              0,              0};
-  R1_TRY(reserve(0, geo.size() * sizeof(double)));
-  R1_TRY(reserve(1, meta.size() * sizeof(std::int32_t)));
-  R1_TRY(reserve(2, ptr.size() * sizeof(std::uint32_t)));
-  R1_TRY(reserve(3, list.size() * sizeof(std::uint32_t)));
+  R1_TRY(upload(2, bytes_of(std::span<const std::uint32_t>(ptr))));
+  R1_TRY(upload(3, bytes_of(std::span<const std::uint32_t>(list))));
   // The image in bands of rows whose colour output fits one storage buffer.
   const std::size_t max_rows = std::max<std::size_t>(1, ctx_->info().max_buffer / (std::size_t{cam.width} * 3 * sizeof(double)));
   const std::size_t band_rows = std::min<std::size_t>(cam.height, max_rows);
@@ -418,12 +498,6 @@ Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorIte
   R1_TRY(reserve(4, band_pixels * sizeof(double)));
   R1_TRY(reserve(5, band_pixels * 3 * sizeof(double)));
   R1_TRY(reserve(6, band_pixels * sizeof(std::int32_t)));
-  R1_TRY(reserve(7, sizeof camera));
-  R1_TRY(ctx_->buffer_write(buffers_[0], bytes_of(std::span<const double>(geo)), 0));
-  R1_TRY(ctx_->buffer_write(buffers_[1], bytes_of(std::span<const std::int32_t>(meta)), 0));
-  R1_TRY(ctx_->buffer_write(buffers_[2], bytes_of(std::span<const std::uint32_t>(ptr)), 0));
-  R1_TRY(ctx_->buffer_write(buffers_[3], bytes_of(std::span<const std::uint32_t>(list)), 0));
-  R1_TRY(ctx_->buffer_write(buffers_[7], bytes_of(std::span<const double>(camera)), 0));
   Slot slots[8];
   for (std::uint32_t b = 0; b < 8; ++b) slots[b] = {b, buffers_[b]};
   for (std::size_t y0 = 0; y0 < cam.height; y0 += band_rows) {
@@ -444,6 +518,56 @@ Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorIte
       std::memcpy(&o, ob.data() + k * 4, 4);
       owner[at + k] = o;
     }
+  }
+  return Status::ok();
+}
+
+Status ImpostorPass::draw_raster(const ImpostorCamera& cam, std::span<const ImpostorItem> items, std::span<double> t,
+                                 std::span<Vec3> color, std::span<std::int64_t> owner) {
+  // One instance (a quad, six vertices) per item, in item order: one indirect draw.
+  std::vector<std::uint32_t> instances(items.size());
+  for (std::size_t i = 0; i < items.size(); ++i) instances[i] = static_cast<std::uint32_t>(i);
+  const std::uint32_t args[4] = {6, static_cast<std::uint32_t>(items.size()), 0, 0};
+  R1_TRY(upload(2, bytes_of(std::span<const std::uint32_t>(instances))));
+  R1_TRY(upload(3, bytes_of(std::span<const std::uint32_t>(args))));
+  // Depth t / (2 t_far): every hit lies within the items' bounding spheres, so below 1/2.
+  double far = 1;
+  for (const ImpostorItem& it : items) {
+    const Vec3 r = it.center - cam.position;
+    far = std::max(far, std::sqrt(r.x * r.x + r.y * r.y + r.z * r.z) + it.radius);
+  }
+  const float depth_scale = static_cast<float>(0.5 / (far * 1.0001));
+  if (target_ == kNoTarget || target_size_ != std::array<std::uint32_t, 2>{cam.width, cam.height}) {
+    if (target_ != kNoTarget) ctx_->target_release(target_);
+    target_ = kNoTarget;
+    R1_ASSIGN(target_, ctx_->target_create(cam.width, cam.height));
+    target_size_ = {cam.width, cam.height};
+  }
+  std::uint32_t push_words[3] = {cam.width, cam.height, 0};
+  std::memcpy(&push_words[2], &depth_scale, 4);
+  std::uint8_t push_bytes[sizeof push_words];
+  std::memcpy(push_bytes, push_words, sizeof push_words);
+  const Slot slots[] = {{0, buffers_[0]}, {1, buffers_[1]}, {2, buffers_[2]}, {7, buffers_[7]}};
+  // Cleared: t = +infinity, owner -1, colour 0.
+  const Context::Clear clear{{{0u, 0x7ff00000u, 0xffffffffu, 0u}, {0u, 0u, 0u, 0u}, {0u, 0u, 0u, 0u}}};
+  R1_TRY(ctx_->draw_indirect(pipeline_, target_, slots, buffers_[3], 1, clear, push_bytes));
+  std::array<std::vector<std::uint32_t>, Context::kTargetColors> words;
+  for (std::uint32_t i = 0; i < Context::kTargetColors; ++i) {
+    R1_ASSIGN(words[i], ctx_->target_read(target_, i));
+  }
+  const auto as_double = [](std::uint32_t lo, std::uint32_t hi) {
+    const std::uint64_t bits = (std::uint64_t{hi} << 32) | lo;
+    double d;
+    std::memcpy(&d, &bits, 8);
+    return d;
+  };
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const std::uint32_t* a = &words[0][k * 4];
+    const std::uint32_t* b = &words[1][k * 4];
+    const std::uint32_t* c = &words[2][k * 4];
+    t[k] = as_double(a[0], a[1]);
+    owner[k] = static_cast<std::int32_t>(a[2]);
+    color[k] = {as_double(b[0], b[1]), as_double(b[2], b[3]), as_double(c[0], c[1])};
   }
   return Status::ok();
 }

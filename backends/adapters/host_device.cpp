@@ -48,8 +48,10 @@ class HostDevice final : public Device {
   Status draw_indirect(PipelineId, std::span<const Binding>, BufferId, std::uint32_t) override {
     return unsupported("draw_indirect");
   }
+  Status surface_configure(std::uint32_t, std::uint32_t) override { return unsupported("surface_configure"); }
   Result<TextureId> surface_acquire() override { return unsupported("surface_acquire"); }
   Status surface_present(TextureId) override { return unsupported("surface_present"); }
+  Result<std::vector<std::uint32_t>> surface_read(TextureId, std::uint32_t) override { return unsupported("surface_read"); }
 
   Result<BufferId> roll(BufferId t, std::int32_t shift, std::uint32_t axis) override {
     R1_ASSIGN(const clifford::Rows x, tensor(t));

@@ -2,6 +2,7 @@
 // compute shader on accel/vulkan's context, the other passes the reference's on the host; the
 // epoch stages are the cpu backend's on the host (the reference's bytes). Its 13.1 device is the
 // Vulkan device on the same context.
+#include <cstdlib>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -44,7 +45,18 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   if (!ctx.is_ok()) throw std::invalid_argument(ctx.status().message());
   auto state = std::make_shared<PassState>();
   state->ctx = std::move(ctx).value();
-  auto pass = vk::ImpostorPass::build(*state->ctx);
+  // The raster pipeline where the device has one (R1-BKD-068); $R1_VULKAN_IMPOSTORS = compute or
+  // raster picks one.
+  vk::ImpostorPass::Mode mode = state->ctx->info().graphics ? vk::ImpostorPass::Mode::kRaster : vk::ImpostorPass::Mode::kCompute;
+  if (const char* env = std::getenv("R1_VULKAN_IMPOSTORS"); env != nullptr && *env != '\0') {
+    const std::string m = env;
+    if (m == "compute") mode = vk::ImpostorPass::Mode::kCompute;
+    else if (m == "raster" && state->ctx->info().graphics) mode = vk::ImpostorPass::Mode::kRaster;
+    else
+      throw std::invalid_argument("R1_VULKAN_IMPOSTORS=" + m + ": compute" +
+                                  (state->ctx->info().graphics ? " or raster" : " (this device has no graphics queue)"));
+  }
+  auto pass = vk::ImpostorPass::build(*state->ctx, mode);
   if (!pass.is_ok()) throw std::invalid_argument(pass.status().message());
   state->impostors = std::move(pass).value();
   auto device = make_vulkan_device_on(state->ctx);
@@ -65,7 +77,10 @@ std::unique_ptr<Backend> make_vulkan_backend() {
 #endif
   return std::make_unique<StageBackend>(
       "vulkan",
-      "on " + name + ": the T1/T2 impostor pass a compute shader (fp64, the reference's intersections); cull, edges, splats, "
+      "on " + name + ": the T1/T2 impostor pass " +
+          (mode == vk::ImpostorPass::Mode::kRaster ? "a graphics pipeline (a quad per impostor, one indirect draw)"
+                                                     : "a compute shader over 16-pixel tiles") +
+          " ray-casting in fp64 with the reference's intersections; cull, edges, splats, "
           "field, composite and labels the reference's on the host; " + epoch + " (the reference's bytes)",
       std::move(stages), Domain::kFixedQ32, std::move(passes), std::move(device).value());
 }

@@ -54,9 +54,14 @@ class Device {
   // raster
   virtual Result<PipelineId> pipeline_create(const PipelineShaders& shaders, const PipelineLayout& layout) = 0;
   virtual Status draw_indirect(PipelineId pipeline, std::span<const Binding> bindings, BufferId indirect, std::uint32_t count) = 0;
-  // presentation
+  // presentation: an offscreen surface (R1-BKD-068). surface_configure sets its size (1280 x 720
+  // until it is called); draw_indirect draws into the surface last acquired, cleared first
+  // (colours 0, depth 1); surface_read returns colour attachment k of a texture, width x height x
+  // 4 32-bit words row-major.
+  virtual Status surface_configure(std::uint32_t width, std::uint32_t height) = 0;
   virtual Result<TextureId> surface_acquire() = 0;
   virtual Status surface_present(TextureId texture) = 0;
+  virtual Result<std::vector<std::uint32_t>> surface_read(TextureId texture, std::uint32_t attachment) = 0;
   // Clifford primitives (tensor buffers as above; each returns a new buffer)
   virtual Result<BufferId> roll(BufferId tensor, std::int32_t shift, std::uint32_t axis) = 0;
   virtual Result<BufferId> shifted_inner(BufferId h, BufferId c, std::span<const std::int32_t> shifts) = 0;

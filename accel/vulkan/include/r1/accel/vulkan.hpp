@@ -24,6 +24,7 @@ struct DeviceInfo {
   std::uint32_t api = 0;    // VkPhysicalDeviceProperties::apiVersion
   bool cpu = false;         // VK_PHYSICAL_DEVICE_TYPE_CPU (lavapipe)
   std::size_t max_buffer = 0;  // the largest storage buffer a shader may bind (maxStorageBufferRange)
+  bool graphics = false;       // a graphics queue and dynamic rendering: the raster calls work
 };
 
 struct Slot {
@@ -55,11 +56,34 @@ class Context {
   Status buffer_write(std::uint32_t id, std::span<const std::uint8_t> data, std::size_t offset);
   Result<std::vector<std::uint8_t>> buffer_read(std::uint32_t id, std::size_t offset, std::size_t size);
 
+  // Whether GLSL 4.60 source compiles as a vertex (`vertex`) or fragment shader: the error says why.
+  Status graphics_check(std::string_view glsl, bool vertex, std::string_view name);
   // GLSL 4.60 compute source to a pipeline; `name` names it in compiler messages.
   Result<std::uint32_t> compute_compile(std::string_view glsl, std::string_view name);
   // One dispatch of `groups` workgroups, waited for; `push` at most kPushBytes.
   Status dispatch(std::uint32_t pipeline, std::span<const Slot> slots, std::array<std::uint32_t, 3> groups,
                   std::span<const std::uint8_t> push = {});
+
+  // ---- raster (spec/backends.md R1-BKD-068), where info().graphics ----
+  // A render target: kTargetColors colour attachments of four 32-bit unsigned integers a pixel,
+  // and a 32-bit float depth attachment, in device memory.
+  static constexpr std::uint32_t kTargetColors = 3;
+  using Clear = std::array<std::array<std::uint32_t, 4>, kTargetColors>;
+  Result<std::uint32_t> target_create(std::uint32_t width, std::uint32_t height);
+  // A graphics pipeline from vertex and fragment GLSL 4.60: no vertex input (the vertex shader
+  // reads storage buffers by gl_VertexIndex and gl_InstanceIndex), triangle lists, no face
+  // culling, depth test `less` with writes, kTargetColors uvec4 outputs; the slots and push
+  // constants of the compute pipelines.
+  Result<std::uint32_t> graphics_compile(std::string_view vertex, std::string_view fragment, std::string_view name);
+  // Clears the target's colours to `clear` and depth to 1, then draws `draws` indirect records
+  // (VkDrawIndirectCommand, 16 bytes each) from buffer `indirect`, and waits. Primitives are
+  // rasterised in order, so of two fragments at equal depth the earlier is kept.
+  Status draw_indirect(std::uint32_t pipeline, std::uint32_t target, std::span<const Slot> slots, std::uint32_t indirect,
+                       std::uint32_t draws, const Clear& clear, std::span<const std::uint8_t> push = {});
+  // Colour attachment `index` of the target: width x height x 4 words, row-major.
+  Result<std::vector<std::uint32_t>> target_read(std::uint32_t target, std::uint32_t index);
+  // Frees the target's images and read-back buffers; its id then names no target.
+  void target_release(std::uint32_t target);
 
  private:
   struct State;
@@ -139,21 +163,38 @@ struct ImpostorItem {
   std::int32_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
 
-// The T1/T2 impostor pass (R1-BKD-065): per pixel, the nearest hit of the pixel's ray with the
-// items whose rectangle holds the pixel (ties to the earlier item), shaded by the headlight
-// 0.25 + 0.75 max(0, -n.d); t is infinity and owner -1 where nothing is hit. The reference's
-// fp64 intersections (reference/render/shapes.cpp) operation for operation.
+// The T1/T2 impostor pass (R1-BKD-065, R1-BKD-068): per pixel, the nearest hit of the pixel's
+// ray with the items whose rectangle holds the pixel (ties to the earlier item), shaded by the
+// headlight 0.25 + 0.75 max(0, -n.d); t is infinity and owner -1 where nothing is hit. The
+// reference's fp64 intersections (reference/render/shapes.cpp) operation for operation.
+//  - kCompute: one compute invocation a pixel over the items binned into 16-pixel tiles; the
+//    nearest hit compared in fp64, as the reference does.
+//  - kRaster: one indirect draw of a quad per item (its rectangle) through a graphics pipeline,
+//    the ray cast in the fragment shader, the nearest kept by a 32-bit float depth test on t: two
+//    hits whose t round to the same float keep the earlier item, where the reference keeps the
+//    nearer.
 class ImpostorPass {
  public:
-  static Result<ImpostorPass> build(Context& ctx);
+  enum class Mode { kCompute, kRaster };
+  static Result<ImpostorPass> build(Context& ctx, Mode mode = Mode::kCompute);
   Status draw(const ImpostorCamera& camera, std::span<const ImpostorItem> items, std::span<double> t,
               std::span<render::Vec3> color, std::span<std::int64_t> owner);
+  Mode mode() const { return mode_; }
 
  private:
+  static constexpr std::uint32_t kNoTarget = 0xffffffffu;
   Status reserve(std::size_t which, std::size_t bytes);
+  Status upload(std::size_t which, std::span<const std::uint8_t> bytes);
+  Status draw_compute(const ImpostorCamera& camera, std::span<const ImpostorItem> items, std::span<double> t,
+                      std::span<render::Vec3> color, std::span<std::int64_t> owner);
+  Status draw_raster(const ImpostorCamera& camera, std::span<const ImpostorItem> items, std::span<double> t,
+                     std::span<render::Vec3> color, std::span<std::int64_t> owner);
   Context* ctx_ = nullptr;
+  Mode mode_ = Mode::kCompute;
   std::uint32_t pipeline_ = 0;
   std::array<std::uint32_t, 8> buffers_{};
+  std::uint32_t target_ = kNoTarget;
+  std::array<std::uint32_t, 2> target_size_{};
 };
 
 }  // namespace r1::vk
