@@ -198,6 +198,15 @@ void Context::buffer_release(std::uint32_t id) {
   b = State::Buffer{};
 }
 
+Status Context::buffer_ensure(std::uint32_t& id, std::size_t bytes) {
+  if (id != 0 && buffer_size(id) >= bytes) return Status::ok();
+  buffer_release(id);
+  id = 0;
+  const std::size_t slack = std::max(bytes, std::min(bytes + bytes / 4, s_->info.max_buffer));
+  R1_ASSIGN(id, buffer_create(std::max<std::size_t>(slack, 16)));
+  return Status::ok();
+}
+
 std::size_t Context::buffer_size(std::uint32_t id) const {
   return id >= 1 && id < s_->buffers.size() ? s_->buffers[id].size : 0;
 }

@@ -427,16 +427,7 @@ Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
   return pass;
 }
 
-Status ImpostorPass::reserve(std::size_t which, std::size_t bytes) {
-  std::uint32_t& id = buffers_[which];
-  if (id != 0 && ctx_->buffer_size(id) >= bytes) return Status::ok();
-  ctx_->buffer_release(id);
-  id = 0;
-  // A quarter more than asked, so that a growing frame does not reallocate every time.
-  const std::size_t slack = std::max(bytes, std::min(bytes + bytes / 4, ctx_->info().max_buffer));
-  R1_ASSIGN(id, ctx_->buffer_create(std::max<std::size_t>(slack, 16)));
-  return Status::ok();
-}
+Status ImpostorPass::reserve(std::size_t which, std::size_t bytes) { return ctx_->buffer_ensure(buffers_[which], bytes); }
 
 Status ImpostorPass::upload(std::size_t which, std::span<const std::uint8_t> bytes) {
   R1_TRY(reserve(which, bytes.size()));

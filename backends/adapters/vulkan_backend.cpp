@@ -1,7 +1,8 @@
-// The vulkan backend (spec/backends.md R1-BKD-065..067): the frame's T1/T2 impostor pass as a
-// compute shader on accel/vulkan's context, the other passes the reference's on the host; the
-// epoch stages are the cpu backend's on the host (the reference's bytes). Its 13.1 device is the
-// Vulkan device on the same context.
+// The vulkan backend (spec/backends.md R1-BKD-065..069): the frame's T1/T2 impostor pass on
+// accel/vulkan's context (a graphics pipeline, or a compute shader), the other passes the
+// reference's on the host; the spectral solver's exact kernels on the device and the other epoch
+// work the cpu backend's on the host (the reference's bytes). Its 13.1 device is the Vulkan device
+// on the same context.
 #include <cstdlib>
 #include <memory>
 #include <stdexcept>
@@ -9,6 +10,7 @@
 
 #include "adapters.hpp"
 #include "stage_backend.hpp"
+#include "r1/accel/vulkan_panel.hpp"
 #include "vulkan_adapters.hpp"
 #if R1_BACKEND_CPU
 #include "r1/accel/cpu/panel_kernels.hpp"
@@ -65,16 +67,34 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   render::FramePasses passes;
   passes.impostors = [state](std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
                              render::OpaqueLayer& layer) { return draw_on_device(*state, list, v, f, layer); };
+  // The spectral solver's inner products and combinations on the device (R1-BKD-069), unless
+  // $R1_VULKAN_SPECTRAL=host keeps them on the host's kernels.
+  bool spectral_on_device = true;
+  if (const char* env = std::getenv("R1_VULKAN_SPECTRAL"); env != nullptr && *env != '\0') {
+    const std::string m = env;
+    if (m == "host") spectral_on_device = false;
+    else if (m != "device") throw std::invalid_argument("R1_VULKAN_SPECTRAL=" + m + ": device or host");
+  }
+  Q32KernelFactory kernels;
+  std::string epoch;
+  if (spectral_on_device) {
+    auto factory = vk::panel_kernel_factory(state->ctx);
+    if (!factory.is_ok()) throw std::invalid_argument(factory.status().message());
+    kernels = std::move(factory).value();
+    epoch = "the spectral solver's exact inner products and combinations on the device, its operator, focus, encoding and "
+            "hierarchy the cpu backend's on the host";
+  } else {
 #if R1_BACKEND_CPU
-  std::string error;
-  const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
-  if (!error.empty()) throw std::invalid_argument(error);
-  ReferenceStages stages(true, false, accel::cpu::kernel_factory(level));
-  const std::string epoch = "epoch stages the cpu backend's on the host";
+    std::string error;
+    const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
+    if (!error.empty()) throw std::invalid_argument(error);
+    kernels = accel::cpu::kernel_factory(level);
+    epoch = "epoch stages the cpu backend's on the host";
 #else
-  ReferenceStages stages(true, false);
-  const std::string epoch = "epoch stages the reference's with their TBB switches, on the host";
+    epoch = "epoch stages the reference's with their TBB switches, on the host";
 #endif
+  }
+  ReferenceStages stages(true, false, std::move(kernels));
   return std::make_unique<StageBackend>(
       "vulkan",
       "on " + name + ": the T1/T2 impostor pass " +

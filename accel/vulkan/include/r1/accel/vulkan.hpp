@@ -53,6 +53,9 @@ class Context {
   std::size_t buffer_size(std::uint32_t id) const;  // 0 for no such buffer
   // Frees the buffer's memory; its id then names no buffer (a no-op for an id that names none).
   void buffer_release(std::uint32_t id);
+  // Makes `id` name a buffer of at least `bytes` (a quarter more when it grows, within the
+  // storage range): kept when it is big enough, else released and replaced. 0 names none yet.
+  Status buffer_ensure(std::uint32_t& id, std::size_t bytes);
   Status buffer_write(std::uint32_t id, std::span<const std::uint8_t> data, std::size_t offset);
   Result<std::vector<std::uint8_t>> buffer_read(std::uint32_t id, std::size_t offset, std::size_t size);
 
