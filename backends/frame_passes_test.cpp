@@ -16,7 +16,12 @@
 #include <random>
 
 #include "r1/accel/vulkan.hpp"
+#include "r1/backends/registry.hpp"
+#include "r1/reference/epoch.hpp"
+#include "r1/reference/generate.hpp"
+#include "r1/reference/graph_build.hpp"
 #include "render/passes.hpp"
+#include "render/scene.hpp"
 #include "render/view.hpp"
 
 namespace {
@@ -177,5 +182,63 @@ INSTANTIATE_TEST_SUITE_P(Modes, FramePasses, testing::Values(vk::ImpostorPass::M
                          [](const testing::TestParamInfo<vk::ImpostorPass::Mode>& p) {
                            return p.param == vk::ImpostorPass::Mode::kCompute ? std::string("compute") : std::string("raster");
                          });
+
+// The field and composite pass on the device (R1-BKD-070), through the backend: frames of one
+// epoch from near (impostors, edges), middle (splats and field) and far (the field alone) against
+// the reference backend's, every channel of every pixel within 1e-6; then again with the device
+// holding 2 candidate nodes a ray, so most rays of the far views take the host's fall-back, which
+// must give the same frames.
+TEST(FramePassesComposite, TheVulkanFieldAndCompositeAreTheReferenceFrames) {
+  std::string reason;
+  auto probe = context_or_skip(reason);
+  if (!probe) {
+    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
+    GTEST_SKIP() << reason;
+  }
+  probe.reset();
+  GenParams gp;
+  gp.kind = GenKind::kBa;
+  gp.n = 400;
+  auto snap = generate(gp);
+  ASSERT_TRUE(snap.is_ok());
+  auto graph = build_graph(*snap);
+  ASSERT_TRUE(graph.is_ok());
+  auto epoch = run_epoch(*snap, *graph, {});
+  ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
+  auto reference = backends::make_backend("reference");
+  ASSERT_TRUE(reference.is_ok());
+  const render::Scene scene = render::make_scene(*epoch);
+  std::vector<render::View> views;
+  for (const double distance : {1200.0, 5000.0, 20000.0}) {
+    render::View base;
+    base.width = 96, base.height = 54;
+    const auto orbit = render::orbit_views(base, scene.centroid, distance, 2);
+    views.insert(views.end(), orbit.begin(), orbit.end());
+  }
+  for (const char* cap : {"", "2"}) {
+    SCOPED_TRACE(std::string("candidate cap ") + (*cap ? cap : "default"));
+    if (*cap) setenv("R1_VULKAN_FIELD_CANDIDATES", cap, 1);
+    auto vulkan = backends::make_backend("vulkan");
+    unsetenv("R1_VULKAN_FIELD_CANDIDATES");
+    ASSERT_TRUE(vulkan.is_ok()) << vulkan.status().message();
+    std::size_t flows = 0;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      render::FrameStats sw, sr;
+      auto got = (*vulkan)->render(*epoch, views[i], {}, &sw, {});
+      auto want = (*reference)->render(*epoch, views[i], {}, &sr, {});
+      ASSERT_TRUE(got.is_ok() && want.is_ok()) << got.status().message();
+      float worst = 0;
+      for (std::size_t k = 0; k < got->rgba.size(); ++k) worst = std::max(worst, std::fabs(got->rgba[k] - want->rgba[k]));
+      EXPECT_LE(worst, 1e-6f) << "view " << i;
+      ASSERT_EQ(got->flow.size(), want->flow.size()) << "view " << i;
+      for (std::size_t k = 0; k < got->flow.size(); ++k) ASSERT_NEAR(got->flow[k], want->flow[k], 1e-4f * (1 + std::fabs(want->flow[k]))) << k;
+      flows += !want->flow.empty();
+      if (i >= 4) {
+        EXPECT_GT(sr.tier_count[4] + sr.tier_count[3], 300u) << "the far views are field and splats";
+      }
+    }
+    EXPECT_GT(flows, 0u) << "some view carries flow";
+  }
+}
 
 }  // namespace

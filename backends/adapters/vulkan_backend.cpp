@@ -9,6 +9,7 @@
 #include <string>
 
 #include "adapters.hpp"
+#include "r1/reference/clifford.hpp"
 #include "stage_backend.hpp"
 #include "r1/accel/vulkan_panel.hpp"
 #include "vulkan_adapters.hpp"
@@ -23,21 +24,123 @@ namespace {
 struct PassState {
   std::shared_ptr<vk::Context> ctx;
   vk::ImpostorPass impostors;
+  vk::CompositePass composite;
 };
 
-Status draw_on_device(PassState& st, std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
-                      render::OpaqueLayer& layer) {
+vk::ImpostorCamera camera_of(const render::View& v, const render::CameraFrame& f) {
   vk::ImpostorCamera cam;
   cam.position = v.camera.position;
   cam.right = f.right, cam.up = f.up, cam.forward = f.forward;
   cam.focal_px = f.focal_px;
   cam.width = static_cast<std::uint32_t>(v.width), cam.height = static_cast<std::uint32_t>(v.height);
+  return cam;
+}
+
+Status draw_on_device(PassState& st, std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
+                      render::OpaqueLayer& layer) {
+  const vk::ImpostorCamera cam = camera_of(v, f);
   std::vector<vk::ImpostorItem> items(list.size());
   for (std::size_t i = 0; i < list.size(); ++i) {
     const render::Impostor& im = list[i];
     items[i] = {im.particle, im.shape, im.center, im.radius, im.color, im.rect.x0, im.rect.y0, im.rect.x1, im.rect.y1};
   }
   return st.impostors.draw(cam, items, layer.t, layer.color, layer.owner);
+}
+
+// The frame's field flattened for the device: every node's field aggregates (FieldFrame::node),
+// the children tables, and per level-0 node the members with field weight (add_members' list).
+vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
+  const render::Scene& s = *ff.scene;
+  vk::FieldData fd;
+  std::uint32_t total = 0;
+  for (int l = 0; l < kLevels; ++l) {
+    fd.level_offset[static_cast<std::size_t>(l)] = total;
+    total += static_cast<std::uint32_t>(s.nodes[static_cast<std::size_t>(l)].size());
+  }
+  fd.level_offset[kLevels] = total;
+  fd.nodes.reserve(std::size_t{total} * 8);
+  for (int l = 0; l < kLevels; ++l)
+    for (std::uint32_t id = 0; id < s.nodes[static_cast<std::size_t>(l)].size(); ++id) {
+      const render::NodeField nd = ff.node(l, id);
+      const double row[8] = {nd.weight, nd.centroid.x, nd.centroid.y, nd.centroid.z, nd.color.x, nd.color.y, nd.color.z, nd.extent};
+      fd.nodes.insert(fd.nodes.end(), row, row + 8);
+    }
+  fd.child_ptr.push_back(0);
+  for (int l = 1; l < kLevels; ++l)
+    for (std::uint32_t id = 0; id < s.nodes[static_cast<std::size_t>(l)].size(); ++id) {
+      for (std::uint32_t c : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children)
+        fd.child.push_back(fd.level_offset[static_cast<std::size_t>(l - 1)] + c);
+      fd.child_ptr.push_back(static_cast<std::uint32_t>(fd.child.size()));
+    }
+  fd.member_ptr.push_back(0);
+  const double n = s.n;
+  for (std::uint32_t id = 0; id < s.nodes[0].size(); ++id) {
+    const std::uint32_t slot = ff.slot[0].empty() ? render::FieldFrame::kFarSlot : ff.slot[0][id];
+    const auto add = [&fd](double w, const render::Vec3& pos, const render::Vec3& c) {
+      const double row[8] = {w, pos.x, pos.y, pos.z, c.x, c.y, c.z, 0.0};
+      fd.members.insert(fd.members.end(), row, row + 8);
+    };
+    if (slot == render::FieldFrame::kFarSlot) {
+      for (std::uint32_t q : s.hierarchy->levels[0][id].children) {
+        const double w = n * s.phi[q];
+        if (w > 0) add(w, s.position[q], s.color[q]);
+      }
+    } else if (slot != render::FieldFrame::kBehindSlot) {
+      const auto [begin, end] = ff.member_range[slot];
+      for (std::uint32_t k = begin; k < end; ++k) add(ff.members[k].weight, ff.members[k].position, ff.members[k].color);
+    }
+    fd.member_ptr.push_back(static_cast<std::uint32_t>(fd.members.size() / 8));
+  }
+  fd.top_ptr.push_back(0);
+  for (const auto& list : ff.top_by_tile) {
+    fd.top.insert(fd.top.end(), list.begin(), list.end());
+    fd.top_ptr.push_back(static_cast<std::uint32_t>(fd.top.size()));
+  }
+  if (ff.top_by_tile.empty()) fd.top_ptr.clear();
+  fd.tiles_x = static_cast<std::uint32_t>(ff.tiles_x);
+  fd.samples = static_cast<std::uint32_t>(ff.params.samples);
+  fd.tau_cam = ff.tau_cam, fd.t_far = ff.t_far;
+  fd.kappa = ff.params.kappa, fd.cutoff = ff.params.cutoff, fd.theta = ff.params.theta, fd.stop = ff.params.stop;
+  fd.seed = s.seed;
+  fd.enabled = v.field;
+  return fd;
+}
+
+Status composite_on_device(PassState& st, const render::CompositeInput& in, render::Image& image) {
+  const render::View& v = in.view;
+  if (in.splats.tiles_x != (v.width + 15) / 16) return Status::internal("vulkan composite: splat tiles are not 16 pixels");
+  render::PixelCompositor host(in);  // builds the frame's field; draws the pixels the device leaves
+  const vk::FieldData fd = field_data(host.field(), v);
+  vk::SplatData sd;
+  for (const render::Splat& sp : in.splats.splats) {
+    const double row[12] = {sp.depth, sp.px, sp.py, sp.ca, sp.cb, sp.cc, sp.opacity, sp.color.x, sp.color.y, sp.color.z, 0, 0};
+    sd.splats.insert(sd.splats.end(), row, row + 12);
+  }
+  sd.tile_ptr.push_back(0);
+  for (const auto& list : in.splats.tiles) {
+    sd.tile.insert(sd.tile.end(), list.begin(), list.end());
+    sd.tile_ptr.push_back(static_cast<std::uint32_t>(sd.tile.size()));
+  }
+  const std::size_t pixels = static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
+  std::vector<double> opaque(pixels * 4);
+  for (std::size_t k = 0; k < pixels; ++k) {
+    opaque[k * 4] = in.opaque.t[k];
+    opaque[k * 4 + 1] = in.opaque.color[k].x, opaque[k * 4 + 2] = in.opaque.color[k].y, opaque[k * 4 + 3] = in.opaque.color[k].z;
+  }
+  std::vector<float> flow;
+  std::vector<std::uint32_t> left;
+  R1_TRY(st.composite.draw(camera_of(v, in.frame), fd, sd, opaque, image.rgba, flow, left));
+  for (const std::uint32_t k : left) {
+    float f[3] = {0, 0, 0};
+    host.pixel(static_cast<int>(k % static_cast<std::uint32_t>(v.width)), static_cast<int>(k / static_cast<std::uint32_t>(v.width)),
+               &image.rgba[std::size_t{k} * 4], f);
+    if (f[0] != 0 || f[1] != 0 || f[2] != 0) {
+      if (flow.empty()) flow.assign(pixels * 3, 0.0f);
+      std::copy(f, f + 3, flow.begin() + static_cast<std::ptrdiff_t>(std::size_t{k} * 3));
+    }
+  }
+  if (!flow.empty()) image.flow = std::move(flow);
+  return Status::ok();
 }
 
 }  // namespace
@@ -61,12 +164,33 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   auto pass = vk::ImpostorPass::build(*state->ctx, mode);
   if (!pass.is_ok()) throw std::invalid_argument(pass.status().message());
   state->impostors = std::move(pass).value();
+  // The field and composite pass (R1-BKD-070), det_exp with the reference's constants.
+  vk::ExpConstants exp;
+  exp.log2e = clifford::detail::kLog2e;
+  exp.ln2_hi = clifford::detail::kLn2Hi;
+  exp.ln2_lo = clifford::detail::kLn2Lo;
+  const auto taylor = clifford::detail::exp_taylor();
+  exp.taylor.assign(taylor.begin(), taylor.end());
+  // $R1_VULKAN_FIELD_CANDIDATES caps the candidate nodes a ray holds on the device (tests use a
+  // small cap to send rays to the host's fall-back).
+  std::uint32_t max_candidates = vk::CompositePass::kMaxCandidates;
+  if (const char* env = std::getenv("R1_VULKAN_FIELD_CANDIDATES"); env != nullptr && *env != '\0') {
+    char* end = nullptr;
+    const unsigned long c = std::strtoul(env, &end, 10);
+    if (end == env || *end != '\0' || c < 1 || c > 4096)
+      throw std::invalid_argument("R1_VULKAN_FIELD_CANDIDATES=" + std::string(env) + ": a count in 1..4096");
+    max_candidates = static_cast<std::uint32_t>(c);
+  }
+  auto composite = vk::CompositePass::build(*state->ctx, exp, max_candidates);
+  if (!composite.is_ok()) throw std::invalid_argument(composite.status().message());
+  state->composite = std::move(composite).value();
   auto device = make_vulkan_device_on(state->ctx);
   if (!device.is_ok()) throw std::invalid_argument(device.status().message());
   const std::string name = (*device)->describe();
   render::FramePasses passes;
   passes.impostors = [state](std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
                              render::OpaqueLayer& layer) { return draw_on_device(*state, list, v, f, layer); };
+  passes.composite = [state](const render::CompositeInput& in, render::Image& image) { return composite_on_device(*state, in, image); };
   // The spectral solver's inner products and combinations on the device (R1-BKD-069), unless
   // $R1_VULKAN_SPECTRAL=host keeps them on the host's kernels.
   bool spectral_on_device = true;

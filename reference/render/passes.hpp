@@ -12,8 +12,11 @@
 #include <vector>
 
 #include "cull.hpp"
+#include "field.hpp"
+#include "image.hpp"
 #include "scene.hpp"
 #include "view.hpp"
+#include "r1/spec/render_options.hpp"
 #include "r1/spec/status.hpp"
 
 namespace r1::render {
@@ -64,9 +67,72 @@ void draw_impostors(std::span<const Impostor> impostors, const View& v, const Ca
 // A backend's impostor pass: the same contract as draw_impostors on a fresh layer (R1-RND-076).
 using ImpostorPass = std::function<Status(std::span<const Impostor>, const View&, const CameraFrame&, OpaqueLayer&)>;
 
+// One T3 splat (R1-RND-040..045): the particle, its view depth and pixel centre, the conic (the
+// inverse of its projected 2D covariance [[ca, cb], [cb, cc]]), its opacity and colour. Its alpha
+// at pixel centre (x, y) is min(0.99, opacity exp(-q / 2)), q the conic's quadratic form of
+// (x - px, y - py); contributions below kSplatMinAlpha are dropped.
+struct Splat {
+  std::uint32_t particle = 0;
+  double depth = 0, px = 0, py = 0;
+  double ca = 0, cb = 0, cc = 0;
+  double opacity = 0;
+  Vec3 color;
+};
+inline constexpr double kSplatMinAlpha = 1.0 / 255.0;
+
+// The splats of a frame front to back (depth, ties by particle), binned into 16-pixel tiles:
+// tiles[ty * tiles_x + tx] lists the splats that may reach the tile, in depth order.
+struct SplatBins {
+  static constexpr int kTile = 16;
+  std::vector<Splat> splats;
+  int tiles_x = 0, tiles_y = 0;
+  std::vector<std::vector<std::uint32_t>> tiles;
+};
+SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled);
+
+// What the field and composite pass reads (R1-RND-078): the opaque layer after impostors and
+// edges, the binned splats, and the frame's scene, view and options (the field is built from
+// them with make_field_frame).
+struct CompositeInput {
+  const Scene& scene;
+  const View& view;
+  const CameraFrame& frame;
+  const RenderOptions& options;
+  const OpaqueLayer& opaque;
+  const SplatBins& splats;
+};
+
+// A backend's field and composite pass: per pixel, the splats and T-infinity samples in front of
+// the opaque hit composited front to back, then the hit (R1-RND-070), written into the image's
+// RGBA and, when the field produced flow, its flow channels. The frame sets the depth.
+using CompositePass = std::function<Status(const CompositeInput&, Image&)>;
+
+// The reference's field and composite, one pixel at a time: what the frame runs for every pixel,
+// and what a backend's pass may run for the pixels it cannot do itself. `rgba` is the pixel's
+// premultiplied colour and alpha, `flow` its flow (0 where the field adds none).
+class PixelCompositor {
+ public:
+  explicit PixelCompositor(const CompositeInput& in);
+  const FieldFrame& field() const { return ff_; }
+  // Pixel (x, y); with `fs` the field walk is counted, with `timing` its time split into field_s
+  // and splat_s.
+  void pixel(int x, int y, float rgba[4], float flow[3], FieldRayStats* fs = nullptr, FrameStats* timing = nullptr);
+
+ private:
+  struct SplatHit {
+    double t, alpha;
+    std::uint32_t splat;
+  };
+  CompositeInput in_;  // references to the frame's values, which outlive the compositor
+  FieldFrame ff_;
+  std::vector<FieldSample> samples_;
+  std::vector<SplatHit> hits_;
+};
+
 // The passes a backend runs in place of the reference's; an empty member is the reference's.
 struct FramePasses {
   ImpostorPass impostors;
+  CompositePass composite;
 };
 
 }  // namespace r1::render

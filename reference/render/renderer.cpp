@@ -16,8 +16,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kSplatLowPass = 0.3;        // px^2 added to the projected covariance (Kerbl et al.)
-constexpr double kMinAlpha = 1.0 / 255.0;    // splat contributions below this are dropped
-constexpr int kTile = 16;                    // splat binning tile, pixels
+constexpr double kMinAlpha = kSplatMinAlpha;  // splat contributions below this are dropped
+constexpr int kTile = SplatBins::kTile;        // splat binning tile, pixels
 
 // ---- edges and bundling (R1-RND-063..066) ----
 
@@ -147,13 +147,6 @@ std::vector<double> screen_sizes(const Scene& s, const View& v, const CameraFram
 
 // ---- splats (R1-RND-040..044) ----
 
-struct Splat {
-  std::uint32_t particle = 0;
-  double depth = 0, px = 0, py = 0;
-  double ca = 0, cb = 0, cc = 0;  // conic: inverse 2D covariance [[ca, cb], [cb, cc]]
-  double opacity = 0;
-  Vec3 color;
-};
 
 std::vector<Vec3> u5_gradients(const Scene& s) {
   std::vector<Vec3> g(s.n);
@@ -406,12 +399,8 @@ void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullR
   }
 }
 
-// The splats of a frame, front to back, binned into kTile tiles (R1-RND-040..045).
-struct SplatBins {
-  std::vector<Splat> splats;
-  int tiles_x = 0, tiles_y = 0;
-  std::vector<std::vector<std::uint32_t>> tiles;  // per tile, indices into splats in depth order
-};
+
+}  // namespace
 
 SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled) {
   // Every visible T3 particle, and the handoff band's share of T-inf ones (R1-RND-045).
@@ -441,76 +430,83 @@ SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const 
   return b;
 }
 
+PixelCompositor::PixelCompositor(const CompositeInput& in)
+    : in_(in), ff_(make_field_frame(in.scene, in.view, in.frame, in.options.field)) {}
+
+void PixelCompositor::pixel(int x, int y, float rgba[4], float flow[3], FieldRayStats* fs, FrameStats* timing) {
+  using clock = std::chrono::steady_clock;
+  const View& v = in_.view;
+  const OpaqueLayer& op = in_.opaque;
+  const SplatBins& bins = in_.splats;
+  const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(v.width) + static_cast<std::size_t>(x);
+  const Ray ray = pixel_ray(v, in_.frame, x + 0.5, y + 0.5);
+  const double t_op = op.t[k];
+  const auto c0 = timing ? clock::now() : clock::time_point{};
+  if (v.field) march_field(ff_, ray, t_op, k, samples_, fs);
+  else samples_.clear();
+  const auto c1 = timing ? clock::now() : clock::time_point{};
+  hits_.clear();
+  const double cos_fwd = dot(ray.d, in_.frame.forward);
+  for (std::uint32_t i : bins.tiles[static_cast<std::size_t>(y / kTile) * bins.tiles_x + x / kTile]) {
+    const Splat& sp = bins.splats[i];
+    const double t = sp.depth / cos_fwd;
+    if (t >= t_op) continue;
+    const double a = splat_alpha(sp, x + 0.5, y + 0.5);
+    if (a >= kMinAlpha) hits_.push_back({t, a, i});
+  }
+  // Tile lists are in depth order; the ray parameter keeps it (t = depth / cos).
+  Vec3 color, fl;
+  double T = 1;
+  std::size_t i = 0, j = 0;
+  while ((i < samples_.size() || j < hits_.size()) && T > 1e-4) {
+    const bool take_splat = j < hits_.size() && (i >= samples_.size() || hits_[j].t <= samples_[i].t);
+    if (take_splat) {
+      const SplatHit& h = hits_[j++];
+      color += bins.splats[h.splat].color * (T * h.alpha);
+      T *= 1 - h.alpha;
+    } else {
+      const FieldSample& fsmp = samples_[i++];
+      color += fsmp.color * (T * fsmp.alpha);
+      fl += fsmp.flow * (T * fsmp.alpha);
+      T *= 1 - fsmp.alpha;
+    }
+  }
+  if (t_op < kInf) {
+    color += op.color[k] * T;
+    T = 0;
+  }
+  rgba[0] = static_cast<float>(color.x);
+  rgba[1] = static_cast<float>(color.y);
+  rgba[2] = static_cast<float>(color.z);
+  rgba[3] = static_cast<float>(1 - T);
+  flow[0] = static_cast<float>(fl.x), flow[1] = static_cast<float>(fl.y), flow[2] = static_cast<float>(fl.z);
+  if (timing) {
+    const auto c2 = clock::now();
+    timing->field_s += std::chrono::duration<double>(c1 - c0).count();
+    timing->splat_s += std::chrono::duration<double>(c2 - c1).count();
+  }
+}
+
+namespace {
+
 // Composite per pixel, front to back in ray order: splats and field samples up to the opaque
 // hit, then the hit (R1-RND-070).
-void composite(const Scene& s, const View& v, const CameraFrame& f, const RenderOptions& options, const OpaqueLayer& op,
-               const SplatBins& bins, Image& image, FrameStats& st, const ProgressFn& progress) {
-  using clock = std::chrono::steady_clock;
-  const int W = v.width, H = v.height;
-  const FieldFrame ff = make_field_frame(s, v, f, options.field);
-  std::vector<FieldSample> samples;
-  struct SplatHit {
-    double t, alpha;
-    std::uint32_t splat;
-  };
-  std::vector<SplatHit> hits;
+void composite(const CompositeInput& in, Image& image, FrameStats& st, const ProgressFn& progress) {
+  const int W = in.view.width, H = in.view.height;
+  PixelCompositor pc(in);
   FieldRayStats fs;
   bool any_flow = false;
   std::vector<float> flow(static_cast<std::size_t>(W) * H * 3, 0.0f);
   for (int y = 0; y < H; ++y) {
     if (progress && (y % 16 == 0 || y + 1 == H)) progress("render", static_cast<std::uint64_t>(y + 1), static_cast<std::uint64_t>(H));
     for (int x = 0; x < W; ++x) {
-      const std::size_t k = static_cast<std::size_t>(y) * W + x;
-      const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
-      const double t_op = op.t[k];
-      auto c0 = clock::now();
-      if (v.field) march_field(ff, ray, t_op, k, samples, &fs);
-      else samples.clear();
-      auto c1 = clock::now();
-      hits.clear();
-      const double cos_fwd = dot(ray.d, f.forward);
-      for (std::uint32_t i : bins.tiles[static_cast<std::size_t>(y / kTile) * bins.tiles_x + x / kTile]) {
-        const Splat& sp = bins.splats[i];
-        const double t = sp.depth / cos_fwd;
-        if (t >= t_op) continue;
-        const double a = splat_alpha(sp, x + 0.5, y + 0.5);
-        if (a >= kMinAlpha) hits.push_back({t, a, i});
-      }
-      // Tile lists are in depth order; the ray parameter keeps it (t = depth / cos).
-      Vec3 color, fl;
-      double T = 1;
-      std::size_t i = 0, j = 0;
-      while ((i < samples.size() || j < hits.size()) && T > 1e-4) {
-        const bool take_splat = j < hits.size() && (i >= samples.size() || hits[j].t <= samples[i].t);
-        if (take_splat) {
-          const SplatHit& h = hits[j++];
-          color += bins.splats[h.splat].color * (T * h.alpha);
-          T *= 1 - h.alpha;
-        } else {
-          const FieldSample& fsmp = samples[i++];
-          color += fsmp.color * (T * fsmp.alpha);
-          fl += fsmp.flow * (T * fsmp.alpha);
-          T *= 1 - fsmp.alpha;
-        }
-      }
-      if (t_op < kInf) {
-        color += op.color[k] * T;
-        T = 0;
-      }
-      float* px = image.px(x, y);
-      px[0] = static_cast<float>(color.x);
-      px[1] = static_cast<float>(color.y);
-      px[2] = static_cast<float>(color.z);
-      px[3] = static_cast<float>(1 - T);
-      if (fl.x != 0 || fl.y != 0 || fl.z != 0) any_flow = true;
-      flow[k * 3] = static_cast<float>(fl.x), flow[k * 3 + 1] = static_cast<float>(fl.y), flow[k * 3 + 2] = static_cast<float>(fl.z);
-      auto c2 = clock::now();
-      st.field_s += std::chrono::duration<double>(c1 - c0).count();
-      st.splat_s += std::chrono::duration<double>(c2 - c1).count();
+      float* fl = flow.data() + (static_cast<std::size_t>(y) * W + x) * 3;
+      pc.pixel(x, y, image.px(x, y), fl, &fs, &st);
+      if (fl[0] != 0 || fl[1] != 0 || fl[2] != 0) any_flow = true;
     }
   }
   if (any_flow) image.flow = std::move(flow);
-  image.depth = op.t;
+  image.depth = in.opaque.t;
   st.field_walked = fs.walked;
   st.field_samples = fs.samples;
   st.field_candidates = fs.candidates;
@@ -582,7 +578,15 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   st.splats = bins.splats.size();
   st.splat_s = seconds_since(t0);
 
-  composite(s, v, f, options, op, bins, image, st, progress);
+  // Field and composite (R1-RND-078: the backend's pass when it has one).
+  if (passes.composite) {
+    t0 = clock::now();
+    R1_TRY(passes.composite({s, v, f, options, op, bins}, image));
+    image.depth = op.t;
+    st.field_s = seconds_since(t0);
+  } else {
+    composite({s, v, f, options, op, bins}, image, st, progress);
+  }
 
   t0 = clock::now();
   if (v.labels) R1_TRY(draw_labels(s, v, f, culled, op, image, st));

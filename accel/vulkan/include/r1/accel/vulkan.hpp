@@ -200,4 +200,46 @@ class ImpostorPass {
   std::array<std::uint32_t, 2> target_size_{};
 };
 
+// The T-infinity field of one frame, flattened (R1-BKD-070; the host builds it from the
+// reference's FieldFrame). Nodes of every level in one table, level l's node id at global index
+// level_offset[l] + id.
+struct FieldData {
+  std::vector<double> nodes;  // 8 doubles a node: weight (0: not in the field), centroid, colour, extent
+  std::array<std::uint32_t, kLevels + 1> level_offset{};
+  std::vector<std::uint32_t> child_ptr, child;  // per node of levels 1 and up (global index - level_offset[1]): children, global indices
+  std::vector<std::uint32_t> member_ptr;        // per level-0 node: its members in `members`
+  std::vector<double> members;                  // 8 doubles a member: weight, position, colour, 0
+  std::vector<std::uint32_t> top_ptr, top;      // per 16-pixel tile: the top-level node ids a ray may meet
+  std::uint32_t tiles_x = 0, samples = 128;
+  double tau_cam = 0, t_far = 0, kappa = 0, cutoff = 0, theta = 0, stop = 0;
+  std::uint64_t seed = 0;  // the jitter's counter-based seed (the scene's)
+  bool enabled = true;     // the view draws the field
+};
+
+// The T3 splats of one frame in depth order, binned into 16-pixel tiles.
+struct SplatData {
+  std::vector<double> splats;  // 12 doubles a splat: depth, px, py, ca, cb, cc, opacity, colour, 0, 0
+  std::vector<std::uint32_t> tile_ptr, tile;
+};
+
+// The field and composite pass (R1-BKD-070): per pixel the reference's T-infinity march and its
+// front-to-back composite with the splats and the opaque layer (4 doubles a pixel: t, colour),
+// into RGBA (4 floats a pixel) and flow (3 floats a pixel, left empty when every pixel's is 0).
+// A ray that meets more candidate nodes than the shader holds (max_candidates, or a walk deeper
+// than its stack) is left to the host: its index is listed in host_pixels and its RGBA is not
+// written.
+class CompositePass {
+ public:
+  static constexpr std::uint32_t kMaxCandidates = 160;
+  static Result<CompositePass> build(Context& ctx, const ExpConstants& constants, std::uint32_t max_candidates = kMaxCandidates);
+  Status draw(const ImpostorCamera& camera, const FieldData& field, const SplatData& splats, std::span<const double> opaque,
+              std::span<float> rgba, std::vector<float>& flow, std::vector<std::uint32_t>& host_pixels);
+
+ private:
+  Context* ctx_ = nullptr;
+  ExpConstants exp_;
+  std::uint32_t pipeline_ = 0;
+  std::array<std::uint32_t, 8> buffers_{};
+};
+
 }  // namespace r1::vk

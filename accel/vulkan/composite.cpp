@@ -1,0 +1,390 @@
+// The field and composite pass as a Vulkan compute shader (spec/backends.md R1-BKD-070): per
+// pixel, the reference's T-infinity march through the hierarchy (R1-RND-050..058) and its
+// front-to-back composite with the splats and the opaque layer (R1-RND-070), in fp64 with the
+// reference's order of operations; exp is det_exp (the Clifford primitives' Cody-Waite and Taylor
+// form) where the reference calls libm's.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "r1/accel/vulkan.hpp"
+
+namespace r1::vk {
+
+namespace {
+
+constexpr const char* kComposite = R"(#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(std430, binding = 0) readonly buffer N { double node[]; };
+layout(std430, binding = 1) readonly buffer I { uint idx[]; };
+layout(std430, binding = 2) readonly buffer M { double member[]; };
+layout(std430, binding = 3) readonly buffer S { double splat[]; };
+layout(std430, binding = 4) readonly buffer O { double opaque[]; };
+layout(std430, binding = 5) writeonly buffer R { float result[]; };
+layout(std430, binding = 6) readonly buffer PR { double prm[]; };
+layout(std430, binding = 7) buffer F { uint flag[]; };
+layout(push_constant) uniform P {
+  uint width; uint height; uint y0; uint rows;
+  uint child_ptr; uint child; uint member_ptr; uint top_ptr; uint top; uint splat_ptr; uint splat_list;
+  uint level0; uint level1; uint level2; uint level3; uint level4;
+  uint tiles_x; uint samples; uint field_on; uint tiles; uint seed_lo; uint seed_hi;
+} p;
+
+const int kMaxCand = 160;
+const int kMaxStack = 192;
+const double kNear = 1e-3LF;
+
+double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
+double pow2(int k) { return packDouble2x32(uvec2(0u, uint(k + 1023) << 20)); }
+
+// det_exp (the reference's Cody-Waite reduction and degree-13 Taylor polynomial) with the Horner
+// steps written out and one return: lavapipe (Mesa 22.3) miscompiled the looped form when it was
+// called inside the sample loop, returning 0 for arguments near 0.
+double det_exp(double x) {
+  precise double t = x * prm[20];
+  double tc = clamp(t, -2000.0LF, 2000.0LF);
+  int k = int(tc >= 0.0LF ? tc + 0.5LF : tc - 0.5LF);
+  double kd = double(k);
+  precise double r = (x - kd * prm[21]) - kd * prm[22];
+  // Horner from the degree-13 coefficient down, written out (no loop).
+  precise double q = ((((((((((((prm[36] * r + prm[35]) * r + prm[34]) * r + prm[33]) * r + prm[32]) * r + prm[31]) * r +
+                         prm[30]) * r + prm[29]) * r + prm[28]) * r + prm[27]) * r + prm[26]) * r + prm[25]) * r + prm[24]) * r + prm[23];
+  int k1 = k >= 0 ? k / 2 : -((-k) / 2);
+  int k2 = clamp(k - k1, -1022, 1023);
+  k1 = clamp(k1, -1022, 1023);
+  precise double a = q * pow2(k1);
+  precise double b = a * pow2(k2);
+  precise double direct = q * pow2(clamp(k, -1022, 1023));
+  double y = (k >= -1022 && k <= 1023) ? direct : b;
+  y = x < -746.0LF ? 0.0LF : y;
+  y = x > 710.0LF ? inf() : y;
+  y = isnan(x) ? x : y;
+  return y;
+}
+
+// Philox4x32-10 (r1::rng::bits) and uniform_double.
+uint64_t rng_bits(uint64_t item, uint64_t dim) {
+  uvec4 c = uvec4(uint(item), uint(item >> 32), uint(dim), uint(dim >> 32));
+  uvec2 k = uvec2(p.seed_lo, p.seed_hi);
+  for (int r = 0; r < 10; ++r) {
+    if (r > 0) { k.x += 0x9E3779B9u; k.y += 0xBB67AE85u; }
+    uint h0, l0, h1, l1;
+    umulExtended(0xD2511F53u, c.x, h0, l0);
+    umulExtended(0xCD9E8D57u, c.z, h1, l1);
+    c = uvec4(h1 ^ c.y ^ k.x, l1, h0 ^ c.w ^ k.y, l0);
+  }
+  return (uint64_t(c.y) << 32) | uint64_t(c.x);
+}
+double uniform01(uint64_t item, uint64_t dim) { return double(rng_bits(item, dim) >> 11) * pow2(-53); }
+
+double dotp(dvec3 a, dvec3 b) { precise double r = a.x * b.x + a.y * b.y + a.z * b.z; return r; }
+
+double field_sigma(double t) {
+  precise double tm = max(t, 0.0LF);
+  precise double tau = prm[13] * tm / prm[14];
+  precise double px = 0.5LF * tm / prm[12] + 1e-9LF;
+  return max(sqrt(tau), px);
+}
+
+uint level_of(uint g) { return g < p.level1 ? 0u : (g < p.level2 ? 1u : (g < p.level3 ? 2u : 3u)); }
+
+dvec3 nvec(uint g, uint o) { return dvec3(node[g * 8u + o], node[g * 8u + o + 1u], node[g * 8u + o + 2u]); }
+
+// The field accumulator of R1-RND-051..053.
+double acc_w; dvec3 acc_c; dvec3 acc_f;
+void acc_add(double weight, dvec3 center, dvec3 color, dvec3 x, double inv2s2, double max_q) {
+  precise dvec3 d = dvec3(center.x - x.x, center.y - x.y, center.z - x.z);
+  precise double q = dotp(d, d) * inv2s2;
+  if (q > max_q) return;
+  precise double kk = weight * det_exp(-q);
+  acc_w += kk;
+  acc_c = dvec3(acc_c.x + color.x * kk, acc_c.y + color.y * kk, acc_c.z + color.z * kk);
+  acc_f = dvec3(acc_f.x + d.x * kk, acc_f.y + d.y * kk, acc_f.z + d.z * kk);
+}
+
+bool within_reach(dvec3 x, dvec3 c, double extent, double reach) {
+  precise dvec3 d = dvec3(x.x - c.x, x.y - c.y, x.z - c.z);
+  precise double r = (extent + reach) * (extent + reach);
+  return dotp(d, d) <= r;
+}
+
+uint cand_node[kMaxCand];
+double cand_t0[kMaxCand];
+double cand_t1[kMaxCand];
+bool cand_agg[kMaxCand];
+uint stack_[kMaxStack];
+
+void main() {
+  uint x = gl_GlobalInvocationID.x, row = gl_GlobalInvocationID.y, y = p.y0 + row;
+  if (x >= p.width || row >= p.rows) return;
+  uint px = row * p.width + x;
+  uint64_t pixel = uint64_t(y) * uint64_t(p.width) + uint64_t(x);
+  dvec3 pos = dvec3(prm[0], prm[1], prm[2]);
+  dvec3 right = dvec3(prm[3], prm[4], prm[5]);
+  dvec3 up = dvec3(prm[6], prm[7], prm[8]);
+  dvec3 fwd = dvec3(prm[9], prm[10], prm[11]);
+  double focal = prm[12];
+  precise double sx = ((double(x) + 0.5LF) - double(p.width) * 0.5LF) / focal;
+  precise double sy = (double(p.height) * 0.5LF - (double(y) + 0.5LF)) / focal;
+  precise dvec3 dir = dvec3(fwd.x + right.x * sx + up.x * sy, fwd.y + right.y * sx + up.y * sy, fwd.z + right.z * sx + up.z * sy);
+  precise double dl = sqrt(dotp(dir, dir));
+  precise dvec3 d = dvec3(dir.x / dl, dir.y / dl, dir.z / dl);
+  double t_op = opaque[px * 4u];
+  double kappa = prm[15], cutoff = prm[16], theta = prm[17], stop = prm[18];
+
+  // ---- the candidate walk (R1-RND-057) ----
+  int nc = 0;
+  double a = 0.0LF, b = 0.0LF, delta = 0.0LF;
+  bool over = false;
+  double t_end = min(t_op, prm[14]);
+  bool march = p.field_on != 0u && t_end > kNear;
+  if (march) {
+    double grow = cutoff * field_sigma(t_end);
+    int sp = 0;
+    uint tile = (y / 16u) * p.tiles_x + x / 16u;
+    if (p.tiles != 0u && tile < p.tiles) {
+      for (uint k = idx[p.top_ptr + tile + 1u]; k > idx[p.top_ptr + tile]; --k) {
+        if (sp == kMaxStack) { over = true; break; }
+        stack_[sp++] = p.level3 + idx[p.top + k - 1u];
+      }
+    } else {
+      for (uint g = p.level4; g > p.level3; --g) {
+        if (sp == kMaxStack) { over = true; break; }
+        stack_[sp++] = g - 1u;
+      }
+    }
+    a = t_end; b = kNear;
+    while (sp > 0 && !over) {
+      uint g = stack_[--sp];
+      double w = node[g * 8u];
+      if (!(w > 0.0LF)) continue;
+      dvec3 c = nvec(g, 1u);
+      double extent = node[g * 8u + 7u];
+      // ray_ball within [kNear, t_end]
+      precise dvec3 oc = dvec3(pos.x - c.x, pos.y - c.y, pos.z - c.z);
+      precise double rr = extent + grow;
+      precise double bb = dotp(d, oc);
+      precise double disc = bb * bb - (dotp(oc, oc) - rr * rr);
+      if (disc < 0.0LF) continue;
+      precise double q = sqrt(disc);
+      double t0 = max(kNear, -bb - q), t1 = min(t_end, -bb + q);
+      if (t0 > t1) continue;
+      uint lv = level_of(g);
+      bool agg = extent <= theta * field_sigma(t0);
+      if (agg || lv == 0u) {
+        if (nc == kMaxCand) { over = true; break; }
+        cand_node[nc] = g; cand_t0[nc] = t0; cand_t1[nc] = t1; cand_agg[nc] = agg; ++nc;
+        a = min(a, t0); b = max(b, t1);
+        continue;
+      }
+      uint c0 = idx[p.child_ptr + g - p.level1], c1 = idx[p.child_ptr + g - p.level1 + 1u];
+      for (uint k = c0; k < c1; ++k) {
+        if (sp == kMaxStack) { over = true; break; }
+        stack_[sp++] = idx[p.child + k];
+      }
+    }
+    if (over) {
+      atomicAdd(flag[0], 1u);
+      result[px * 7u + 3u] = uintBitsToFloat(0x7fc00000u);  // the host draws this pixel
+      return;
+    }
+    // Entry order, ties by level and id (global index).
+    for (int i = 1; i < nc; ++i)
+      for (int j = i; j > 0 && (cand_t0[j - 1] > cand_t0[j] || (cand_t0[j - 1] == cand_t0[j] && cand_node[j - 1] > cand_node[j])); --j) {
+        uint tn = cand_node[j]; cand_node[j] = cand_node[j - 1]; cand_node[j - 1] = tn;
+        double ta = cand_t0[j]; cand_t0[j] = cand_t0[j - 1]; cand_t0[j - 1] = ta;
+        double tb = cand_t1[j]; cand_t1[j] = cand_t1[j - 1]; cand_t1[j - 1] = tb;
+        bool tg = cand_agg[j]; cand_agg[j] = cand_agg[j - 1]; cand_agg[j - 1] = tg;
+      }
+    march = nc > 0 && b > a;
+    if (march) delta = (b - a) / double(p.samples);
+  }
+
+  // ---- splats and samples, merged front to back (R1-RND-070) ----
+  double cos_fwd = dotp(d, fwd);
+  uint tile_s = (y / 16u) * p.tiles_x + x / 16u;
+  uint sj = idx[p.splat_ptr + tile_s], sj_end = idx[p.splat_ptr + tile_s + 1u];
+  double max_q = 0.5LF * cutoff * cutoff;
+  int si = 0;
+  double field_t = 1.0LF;
+  bool have_s = false, have_h = false;
+  double s_t = 0.0LF, s_alpha = 0.0LF, h_t = 0.0LF, h_alpha = 0.0LF;
+  dvec3 s_color = dvec3(0.0LF), s_flow = dvec3(0.0LF), h_color = dvec3(0.0LF);
+  dvec3 color = dvec3(0.0LF), fl = dvec3(0.0LF);
+  double T = 1.0LF;
+  while (T > 1e-4LF) {
+    // The next field sample, when none is pending.
+    while (!have_s && march && si < int(p.samples) && field_t >= stop) {
+      int i = si++;
+      precise double t = a + (double(i) + uniform01(pixel, uint64_t(i))) * delta;
+      if (t > b) { si = int(p.samples); break; }
+      double sigma = field_sigma(t);
+      precise double inv = 1.0LF / (2.0LF * sigma * sigma);
+      precise double reach = cutoff * sigma;
+      precise dvec3 xs = dvec3(pos.x + d.x * t, pos.y + d.y * t, pos.z + d.z * t);
+      acc_w = 0.0LF; acc_c = dvec3(0.0LF); acc_f = dvec3(0.0LF);
+      bool any = false;
+      for (int c = 0; c < nc; ++c) {
+        if (cand_t0[c] > t || cand_t1[c] < t) continue;
+        any = true;
+        uint g = cand_node[c];
+        if (!within_reach(xs, nvec(g, 1u), node[g * 8u + 7u], reach)) continue;
+        if (cand_agg[c]) {
+          acc_add(node[g * 8u], nvec(g, 1u), nvec(g, 4u), xs, inv, inf());
+          continue;
+        }
+        uint m0 = idx[p.member_ptr + g], m1 = idx[p.member_ptr + g + 1u];
+        for (uint m = m0; m < m1; ++m)
+          acc_add(member[m * 8u], dvec3(member[m * 8u + 1u], member[m * 8u + 2u], member[m * 8u + 3u]),
+                  dvec3(member[m * 8u + 4u], member[m * 8u + 5u], member[m * 8u + 6u]), xs, inv, max_q);
+      }
+      if (!any || acc_w <= 0.0LF) continue;
+      precise double density = kappa / sigma * acc_w;
+      precise double alpha = 1.0LF - det_exp(-density * delta);
+      s_t = t; s_alpha = alpha;
+      s_color = dvec3(acc_c.x / acc_w, acc_c.y / acc_w, acc_c.z / acc_w);
+      s_flow = dvec3(acc_f.x / acc_w, acc_f.y / acc_w, acc_f.z / acc_w);
+      have_s = true;
+      field_t *= 1.0LF - alpha;
+    }
+    // The next splat in front of the opaque hit.
+    while (!have_h && sj < sj_end) {
+      uint k = idx[p.splat_list + sj++] * 12u;
+      precise double t = splat[k] / cos_fwd;
+      if (t >= t_op) continue;
+      precise double dx = (double(x) + 0.5LF) - splat[k + 1u], dy = (double(y) + 0.5LF) - splat[k + 2u];
+      precise double q = splat[k + 3u] * dx * dx + 2.0LF * splat[k + 4u] * dx * dy + splat[k + 5u] * dy * dy;
+      double al = min(0.99LF, splat[k + 6u] * det_exp(-0.5LF * q));
+      if (!(al >= 1.0LF / 255.0LF)) continue;
+      h_t = t; h_alpha = al; h_color = dvec3(splat[k + 7u], splat[k + 8u], splat[k + 9u]);
+      have_h = true;
+    }
+    if (!have_s && !have_h) break;
+    if (have_h && (!have_s || h_t <= s_t)) {
+      color = dvec3(color.x + h_color.x * (T * h_alpha), color.y + h_color.y * (T * h_alpha), color.z + h_color.z * (T * h_alpha));
+      T *= 1.0LF - h_alpha;
+      have_h = false;
+    } else {
+      color = dvec3(color.x + s_color.x * (T * s_alpha), color.y + s_color.y * (T * s_alpha), color.z + s_color.z * (T * s_alpha));
+      fl = dvec3(fl.x + s_flow.x * (T * s_alpha), fl.y + s_flow.y * (T * s_alpha), fl.z + s_flow.z * (T * s_alpha));
+      T *= 1.0LF - s_alpha;
+      have_s = false;
+    }
+  }
+  if (t_op < inf()) {
+    color = dvec3(color.x + opaque[px * 4u + 1u] * T, color.y + opaque[px * 4u + 2u] * T, color.z + opaque[px * 4u + 3u] * T);
+    T = 0.0LF;
+  }
+  result[px * 7u] = float(color.x);
+  result[px * 7u + 1u] = float(color.y);
+  result[px * 7u + 2u] = float(color.z);
+  result[px * 7u + 3u] = float(1.0LF - T);
+  result[px * 7u + 4u] = float(fl.x);
+  result[px * 7u + 5u] = float(fl.y);
+  result[px * 7u + 6u] = float(fl.z);
+  if (fl.x != 0.0LF || fl.y != 0.0LF || fl.z != 0.0LF) flag[1] = 1u;
+}
+)";
+
+template <class T>
+std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
+  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
+}
+
+}  // namespace
+
+Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& constants, std::uint32_t max_candidates) {
+  if (constants.taylor.size() != 14) return Status::input("vulkan composite: det_exp needs 14 Taylor coefficients");
+  if (max_candidates < 1 || max_candidates > 4096) return Status::input("vulkan composite: candidates per ray must be 1..4096");
+  CompositePass pass;
+  pass.ctx_ = &ctx;
+  pass.exp_ = constants;
+  std::string source = kComposite;
+  const std::string line = "const int kMaxCand = 160;";
+  source.replace(source.find(line), line.size(), "const int kMaxCand = " + std::to_string(max_candidates) + ";");
+  R1_ASSIGN(pass.pipeline_, ctx.compute_compile(source, "composite"));
+  return pass;
+}
+
+Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, const SplatData& splats,
+                           std::span<const double> opaque, std::span<float> rgba, std::vector<float>& flow,
+                           std::vector<std::uint32_t>& host_pixels) {
+  const std::size_t pixels = std::size_t{cam.width} * cam.height;
+  if (cam.width == 0 || cam.height == 0 || opaque.size() != pixels * 4 || rgba.size() != pixels * 4)
+    return Status::input("vulkan composite: the layers are not " + std::to_string(cam.width) + " x " + std::to_string(cam.height));
+  const std::size_t nodes = field.nodes.size() / 8;
+  if (field.level_offset[kLevels] != nodes || field.child_ptr.size() != nodes - field.level_offset[1] + 1 ||
+      field.member_ptr.size() != field.level_offset[1] + 1)
+    return Status::input("vulkan composite: the field's node tables do not match");
+  // Every index table in one buffer, at the offsets the push constants give.
+  std::vector<std::uint32_t> idx;
+  const auto append = [&idx](const std::vector<std::uint32_t>& v) {
+    const auto at = static_cast<std::uint32_t>(idx.size());
+    idx.insert(idx.end(), v.begin(), v.end());
+    return at;
+  };
+  const std::uint32_t child_ptr = append(field.child_ptr), child = append(field.child), member_ptr = append(field.member_ptr),
+                      top_ptr = append(field.top_ptr), top = append(field.top), splat_ptr = append(splats.tile_ptr),
+                      splat_list = append(splats.tile);
+  if (idx.empty()) idx.push_back(0);
+  std::vector<double> prm(40, 0.0);
+  const double camera[13] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z, cam.up.x,
+                             cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z, cam.focal_px};
+  std::copy(camera, camera + 13, prm.begin());
+  prm[13] = field.tau_cam, prm[14] = field.t_far, prm[15] = field.kappa, prm[16] = field.cutoff, prm[17] = field.theta;
+  prm[18] = field.stop;
+  prm[20] = exp_.log2e, prm[21] = exp_.ln2_hi, prm[22] = exp_.ln2_lo;
+  std::copy(exp_.taylor.begin(), exp_.taylor.end(), prm.begin() + 23);
+  const auto ensure_write = [&](std::size_t which, auto span) -> Status {
+    R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
+    return ctx_->buffer_write(buffers_[which], bytes_of(span), 0);
+  };
+  const std::vector<double> one(8, 0.0);
+  R1_TRY(ensure_write(0, std::span<const double>(field.nodes.empty() ? one : field.nodes)));
+  R1_TRY(ensure_write(1, std::span<const std::uint32_t>(idx)));
+  R1_TRY(ensure_write(2, std::span<const double>(field.members.empty() ? one : field.members)));
+  R1_TRY(ensure_write(3, std::span<const double>(splats.splats.empty() ? one : splats.splats)));
+  R1_TRY(ensure_write(6, std::span<const double>(prm)));
+  // Bands of rows whose opaque layer and results fit one storage buffer each.
+  const std::size_t band = std::max<std::size_t>(1, std::min<std::size_t>(cam.height, ctx_->info().max_buffer / (std::size_t{cam.width} * 32)));
+  R1_TRY(ctx_->buffer_ensure(buffers_[4], band * cam.width * 32));
+  R1_TRY(ctx_->buffer_ensure(buffers_[5], band * cam.width * 28));
+  R1_TRY(ctx_->buffer_ensure(buffers_[7], 8));
+  const std::uint32_t zero[2] = {0, 0};
+  R1_TRY(ctx_->buffer_write(buffers_[7], bytes_of(std::span<const std::uint32_t>(zero)), 0));
+  Slot slots[8];
+  for (std::uint32_t s = 0; s < 8; ++s) slots[s] = {s, buffers_[s]};
+  std::vector<float> flows(pixels * 3, 0.0f);
+  host_pixels.clear();
+  for (std::size_t y0 = 0; y0 < cam.height; y0 += band) {
+    const std::size_t rows = std::min<std::size_t>(band, cam.height - y0), n = rows * cam.width, at = y0 * cam.width;
+    R1_TRY(ctx_->buffer_write(buffers_[4], bytes_of(opaque.subspan(at * 4, n * 4)), 0));
+    const std::array<std::uint32_t, 22> push{cam.width, cam.height, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows),
+                                             child_ptr, child, member_ptr, top_ptr, top, splat_ptr, splat_list,
+                                             field.level_offset[0], field.level_offset[1], field.level_offset[2],
+                                             field.level_offset[3], field.level_offset[4], field.tiles_x, field.samples,
+                                             field.enabled ? 1u : 0u, static_cast<std::uint32_t>(field.top_ptr.empty() ? 0 : field.top_ptr.size() - 1),
+                                             static_cast<std::uint32_t>(field.seed), static_cast<std::uint32_t>(field.seed >> 32)};
+    std::array<std::uint8_t, sizeof push> push_bytes;
+    std::memcpy(push_bytes.data(), push.data(), sizeof push);
+    R1_TRY(ctx_->dispatch(pipeline_, slots, {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));
+    R1_ASSIGN(const auto out, ctx_->buffer_read(buffers_[5], 0, n * 28));
+    for (std::size_t k = 0; k < n; ++k) {
+      float v[7];
+      std::memcpy(v, out.data() + k * 28, 28);
+      if (std::isnan(v[3])) host_pixels.push_back(static_cast<std::uint32_t>(at + k));
+      std::copy(v, v + 4, rgba.begin() + static_cast<std::ptrdiff_t>((at + k) * 4));
+      std::copy(v + 4, v + 7, flows.begin() + static_cast<std::ptrdiff_t>((at + k) * 3));
+    }
+  }
+  R1_ASSIGN(const auto flags, ctx_->buffer_read(buffers_[7], 0, 8));
+  std::uint32_t f[2];
+  std::memcpy(f, flags.data(), 8);
+  flow.clear();
+  if (f[1] != 0) flow = std::move(flows);
+  return Status::ok();
+}
+
+}  // namespace r1::vk
