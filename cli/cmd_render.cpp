@@ -60,6 +60,9 @@ void print_stats(const fs::path& path, const render::View& v, const render::Fram
               static_cast<unsigned long long>(st.labels));
   std::printf("  time %.2f s: cull %.3f, T1/T2 impostors %.2f, edges %.2f, T3 splats %.2f, Tinf field %.2f, labels %.3f\n", st.total_s,
               st.cull_s, st.impostor_s, st.edge_s, st.splat_s, st.field_s, st.label_s);
+  if (st.host_pixels > 0)
+    std::printf("  the backend's field pass left %llu pixels (%.2f%%) to the host\n", static_cast<unsigned long long>(st.host_pixels),
+                100.0 * static_cast<double>(st.host_pixels) / (static_cast<double>(v.width) * v.height));
   if (st.field_candidates > 0) {
     const double pixels = static_cast<double>(v.width) * v.height;
     std::printf("  field per pixel: %.1f nodes tested, %.1f on the ray, %.1f samples, %.0f kernel evaluations\n",

@@ -32,7 +32,7 @@ layout(push_constant) uniform P {
   uint tiles_x; uint samples; uint field_on; uint tiles; uint seed_lo; uint seed_hi;
 } p;
 
-const int kMaxCand = 160;
+const int kMaxCand = R1_MAX_CANDIDATES;  // build() substitutes the cap
 const int kMaxStack = 192;
 const double kNear = 1e-3LF;
 
@@ -302,8 +302,8 @@ Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& con
   pass.ctx_ = &ctx;
   pass.exp_ = constants;
   std::string source = kComposite;
-  const std::string line = "const int kMaxCand = 160;";
-  source.replace(source.find(line), line.size(), "const int kMaxCand = " + std::to_string(max_candidates) + ";");
+  const std::string key = "R1_MAX_CANDIDATES";
+  source.replace(source.find(key), key.size(), std::to_string(max_candidates));
   R1_ASSIGN(pass.pipeline_, ctx.compute_compile(source, "composite"));
   return pass;
 }

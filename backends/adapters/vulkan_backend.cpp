@@ -106,7 +106,7 @@ vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
   return fd;
 }
 
-Status composite_on_device(PassState& st, const render::CompositeInput& in, render::Image& image) {
+Status composite_on_device(PassState& st, const render::CompositeInput& in, render::Image& image, render::FrameStats& stats) {
   const render::View& v = in.view;
   if (in.splats.tiles_x != (v.width + 15) / 16) return Status::internal("vulkan composite: splat tiles are not 16 pixels");
   render::PixelCompositor host(in);  // builds the frame's field; draws the pixels the device leaves
@@ -130,6 +130,7 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
   std::vector<float> flow;
   std::vector<std::uint32_t> left;
   R1_TRY(st.composite.draw(camera_of(v, in.frame), fd, sd, opaque, image.rgba, flow, left));
+  stats.host_pixels = left.size();
   for (const std::uint32_t k : left) {
     float f[3] = {0, 0, 0};
     host.pixel(static_cast<int>(k % static_cast<std::uint32_t>(v.width)), static_cast<int>(k / static_cast<std::uint32_t>(v.width)),
@@ -190,7 +191,9 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   render::FramePasses passes;
   passes.impostors = [state](std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
                              render::OpaqueLayer& layer) { return draw_on_device(*state, list, v, f, layer); };
-  passes.composite = [state](const render::CompositeInput& in, render::Image& image) { return composite_on_device(*state, in, image); };
+  passes.composite = [state](const render::CompositeInput& in, render::Image& image, render::FrameStats& st) {
+    return composite_on_device(*state, in, image, st);
+  };
   // The spectral solver's inner products and combinations on the device (R1-BKD-069), unless
   // $R1_VULKAN_SPECTRAL=host keeps them on the host's kernels.
   bool spectral_on_device = true;

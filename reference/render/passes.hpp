@@ -104,8 +104,9 @@ struct CompositeInput {
 
 // A backend's field and composite pass: per pixel, the splats and T-infinity samples in front of
 // the opaque hit composited front to back, then the hit (R1-RND-070), written into the image's
-// RGBA and, when the field produced flow, its flow channels. The frame sets the depth.
-using CompositePass = std::function<Status(const CompositeInput&, Image&)>;
+// RGBA and, when the field produced flow, its flow channels; it counts the pixels it left to the
+// host in FrameStats::host_pixels. The frame sets the depth.
+using CompositePass = std::function<Status(const CompositeInput&, Image&, FrameStats&)>;
 
 // The reference's field and composite, one pixel at a time: what the frame runs for every pixel,
 // and what a backend's pass may run for the pixels it cannot do itself. `rgba` is the pixel's

@@ -581,7 +581,7 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   // Field and composite (R1-RND-078: the backend's pass when it has one).
   if (passes.composite) {
     t0 = clock::now();
-    R1_TRY(passes.composite({s, v, f, options, op, bins}, image));
+    R1_TRY(passes.composite({s, v, f, options, op, bins}, image, st));
     image.depth = op.t;
     st.field_s = seconds_since(t0);
   } else {
