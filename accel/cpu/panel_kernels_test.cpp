@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "r1/fixedpoint/counter_rng.hpp"
+#include "panel_cases.hpp"
 #include "test_support.hpp"
 
 namespace r1::accel::cpu {
@@ -23,14 +24,7 @@ using spectral::PanelOps;
 // A panel whose column c has entries of about `bits[c]` bits (random signs), with the extremes
 // of the vector path's range planted in a few rows.
 Panel<fx::Q32> make_panel(std::size_t n, const std::vector<int>& bits, std::uint64_t seed) {
-  Panel<fx::Q32> p(n, bits.size());
-  for (std::size_t c = 0; c < bits.size(); ++c)
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint64_t r = rng::bits(seed, i, c);
-      const int b = bits[c];
-      std::int64_t v = b >= 63 ? static_cast<std::int64_t>(r) : static_cast<std::int64_t>(r >> (64 - b)) - (std::int64_t{1} << (b - 1));
-      p.at(i, c) = fx::Q32::from_raw(v);
-    }
+  Panel<fx::Q32> p = test::random_panel(n, bits, seed);
   // The edges of the offset range: -2^51 is inside, 2^51 - 1 inside, 2^51 outside.
   if (n > 300) {
     p.at(7, 0) = fx::Q32::from_raw(-(std::int64_t{1} << 51));
@@ -109,14 +103,8 @@ TEST(CpuPanelKernels, EveryLevelGivesThePortableCombinationsBitForBit) {
     };
     for (std::size_t ci = 0; ci < cases.size(); ++ci) {
       const Case& k = cases[ci];
-      std::vector<double> coef(k.terms.size() * k.outs.size());
-      for (std::size_t j = 0; j < coef.size(); ++j) {
-        // Coefficients over the whole allowed range (-8, 8), tiny ones and exact extremes.
-        const std::uint64_t r = rng::bits(0xc0ef, ci, j);
-        const double u = static_cast<double>(static_cast<std::int64_t>(r >> 11) - (std::int64_t{1} << 52)) * 0x1p-52;
-        coef[j] = j % 7 == 0 ? u * 7.999999 : (j % 7 == 1 ? u * 1e-12 : u * 0.75);
-      }
-      coef[0] = -7.999999999;
+      // Coefficients over the whole allowed range (-8, 8), tiny ones and exact extremes.
+      const std::vector<double> coef = test::combine_coefficients(ci, k.terms.size() * k.outs.size());
       Panel<fx::Q32> want = start;
       PanelOps<fx::Q32>(n, 20, false, 48).combine(want, k.outs, k.bases, k.terms, coef);
       for (const Simd s : levels())

@@ -11,7 +11,7 @@
 #include <cstdlib>
 #include <numeric>
 
-#include "r1/fixedpoint/counter_rng.hpp"
+#include "panel_cases.hpp"
 
 namespace r1::vk {
 namespace {
@@ -34,19 +34,7 @@ std::shared_ptr<Context> context_or_skip(std::string& reason) {
     GTEST_SKIP() << reason;                                                                                     \
   }
 
-// Column c's entries have about bits[c] bits, random signs.
-Panel<fx::Q32> make_panel(std::size_t n, const std::vector<int>& bits, std::uint64_t seed) {
-  Panel<fx::Q32> p(n, bits.size());
-  for (std::size_t c = 0; c < bits.size(); ++c)
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint64_t r = rng::bits(seed, i, c);
-      const int b = bits[c];
-      const std::int64_t v =
-          b >= 63 ? static_cast<std::int64_t>(r) : static_cast<std::int64_t>(r >> (64 - b)) - (std::int64_t{1} << (b - 1));
-      p.at(i, c) = fx::Q32::from_raw(v);
-    }
-  return p;
-}
+Panel<fx::Q32> make_panel(std::size_t n, const std::vector<int>& bits, std::uint64_t seed) { return test::random_panel(n, bits, seed); }
 
 std::vector<std::uint64_t> dots_bits(const PanelOps<fx::Q32>& ops, const Panel<fx::Q32>& p, const std::vector<std::uint32_t>& qs,
                                      const std::vector<std::uint32_t>& ws) {
@@ -103,13 +91,7 @@ TEST(VulkanPanelKernels, CombinationsAreThePortableOnesBitForBit) {
     };
     for (std::size_t ci = 0; ci < cases.size(); ++ci) {
       const Case& k = cases[ci];
-      std::vector<double> coef(k.terms.size() * k.outs.size());
-      for (std::size_t j = 0; j < coef.size(); ++j) {
-        const std::uint64_t r = rng::bits(0xc0ef, ci, j);
-        const double u = static_cast<double>(static_cast<std::int64_t>(r >> 11) - (std::int64_t{1} << 52)) * 0x1p-52;
-        coef[j] = j % 7 == 0 ? u * 7.999999 : (j % 7 == 1 ? u * 1e-12 : u * 0.75);
-      }
-      coef[0] = -7.999999999;
+      const std::vector<double> coef = test::combine_coefficients(ci, k.terms.size() * k.outs.size());
       Panel<fx::Q32> want = start, got = start;
       PanelOps<fx::Q32>(n, 20, false, 48).combine(want, k.outs, k.bases, k.terms, coef);
       (*factory)(n, 20, false, 48)->combine(got, k.outs, k.bases, k.terms, coef);

@@ -9,6 +9,9 @@
 
 namespace r1::backends {
 
+// det_exp's constants from the reference's Clifford code (R1-RND-101), for the device's shaders.
+vk::ExpConstants reference_exp_constants();
+
 // The Vulkan device of the 13.1 trait on an existing context.
 Result<std::unique_ptr<Device>> make_vulkan_device_on(std::shared_ptr<vk::Context> ctx);
 

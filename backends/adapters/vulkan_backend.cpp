@@ -9,7 +9,6 @@
 #include <string>
 
 #include "adapters.hpp"
-#include "r1/reference/clifford.hpp"
 #include "stage_backend.hpp"
 #include "r1/accel/vulkan_panel.hpp"
 #include "vulkan_adapters.hpp"
@@ -166,12 +165,6 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   if (!pass.is_ok()) throw std::invalid_argument(pass.status().message());
   state->impostors = std::move(pass).value();
   // The field and composite pass (R1-BKD-070), det_exp with the reference's constants.
-  vk::ExpConstants exp;
-  exp.log2e = clifford::detail::kLog2e;
-  exp.ln2_hi = clifford::detail::kLn2Hi;
-  exp.ln2_lo = clifford::detail::kLn2Lo;
-  const auto taylor = clifford::detail::exp_taylor();
-  exp.taylor.assign(taylor.begin(), taylor.end());
   // $R1_VULKAN_FIELD_CANDIDATES caps the candidate nodes a ray holds on the device (tests use a
   // small cap to send rays to the host's fall-back).
   std::uint32_t max_candidates = vk::CompositePass::kMaxCandidates;
@@ -182,7 +175,7 @@ std::unique_ptr<Backend> make_vulkan_backend() {
       throw std::invalid_argument("R1_VULKAN_FIELD_CANDIDATES=" + std::string(env) + ": a count in 1..4096");
     max_candidates = static_cast<std::uint32_t>(c);
   }
-  auto composite = vk::CompositePass::build(*state->ctx, exp, max_candidates);
+  auto composite = vk::CompositePass::build(*state->ctx, reference_exp_constants(), max_candidates);
   if (!composite.is_ok()) throw std::invalid_argument(composite.status().message());
   state->composite = std::move(composite).value();
   auto device = make_vulkan_device_on(state->ctx);

@@ -125,14 +125,18 @@ Result<std::unique_ptr<Device>> make_vulkan_device() {
   return make_vulkan_device_on(std::move(ctx));
 }
 
-Result<std::unique_ptr<Device>> make_vulkan_device_on(std::shared_ptr<vk::Context> ctx) {
+vk::ExpConstants reference_exp_constants() {
   vk::ExpConstants c;
   c.log2e = clifford::detail::kLog2e;
   c.ln2_hi = clifford::detail::kLn2Hi;
   c.ln2_lo = clifford::detail::kLn2Lo;
   const auto taylor = clifford::detail::exp_taylor();
   c.taylor.assign(taylor.begin(), taylor.end());
-  R1_ASSIGN(auto kernels, vk::CliffordKernels::build(*ctx, c));
+  return c;
+}
+
+Result<std::unique_ptr<Device>> make_vulkan_device_on(std::shared_ptr<vk::Context> ctx) {
+  R1_ASSIGN(auto kernels, vk::CliffordKernels::build(*ctx, reference_exp_constants()));
   return std::unique_ptr<Device>(std::make_unique<VulkanDevice>(std::move(ctx), std::move(kernels)));
 }
 
