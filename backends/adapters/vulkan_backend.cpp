@@ -1,8 +1,8 @@
-// The vulkan backend (spec/backends.md R1-BKD-065..069): the frame's T1/T2 impostor pass on
-// accel/vulkan's context (a graphics pipeline, or a compute shader), the other passes the
-// reference's on the host; the spectral solver's exact kernels on the device and the other epoch
-// work the cpu backend's on the host (the reference's bytes). Its 13.1 device is the Vulkan device
-// on the same context.
+// The vulkan backend (spec/backends.md R1-BKD-065..070): on accel/vulkan's context the frame's
+// T1/T2 impostor pass (a graphics pipeline, or a compute shader) and its field and composite pass,
+// and the spectral solver's exact kernels; cull, edges, splat binning, labels and the other epoch
+// work on the host (the reference's passes, the cpu backend's stages). Its epochs are the
+// reference's bytes. Its 13.1 device is the Vulkan device on the same context.
 #include <cstdlib>
 #include <memory>
 #include <stdexcept>
@@ -220,8 +220,9 @@ std::unique_ptr<Backend> make_vulkan_backend() {
       "on " + name + ": the T1/T2 impostor pass " +
           (mode == vk::ImpostorPass::Mode::kRaster ? "a graphics pipeline (a quad per impostor, one indirect draw)"
                                                      : "a compute shader over 16-pixel tiles") +
-          " ray-casting in fp64 with the reference's intersections; cull, edges, splats, "
-          "field, composite and labels the reference's on the host; " + epoch + " (the reference's bytes)",
+          " ray-casting in fp64 with the reference's intersections; the T-infinity field and composite a compute shader "
+          "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes on the host); cull, edges, splat "
+          "binning and labels the reference's on the host; " + epoch + " (the reference's bytes)",
       std::move(stages), Domain::kFixedQ32, std::move(passes), std::move(device).value());
 }
 
