@@ -1,8 +1,9 @@
-// The frame's passes (spec/render.md R1-RND-075..077): the reference frame of renderer.hpp as
+// The frame's passes (spec/render.md R1-RND-075..078): the reference frame of renderer.hpp as
 // cull -> impostors -> edges -> splats -> field and composite -> labels, with the values that flow
 // between them public, so that a backend can run the passes it accelerates and conformance can
-// compare a pass's output with the reference's one by one. The first seam is the opaque impostor
-// pass (T1/T2): its input is the list of impostors, its output the opaque layer.
+// compare a pass's output with the reference's one by one. Two are seams: the opaque impostor
+// pass (T1/T2: impostor list -> opaque layer) and the field and composite pass (opaque layer,
+// splats and field -> image).
 #pragma once
 
 #include <cstdint>
