@@ -29,11 +29,10 @@ layout(push_constant) uniform P {
   uint width; uint height; uint y0; uint rows;
   uint child_ptr; uint child; uint member_ptr; uint top_ptr; uint top; uint splat_ptr; uint splat_list;
   uint level0; uint level1; uint level2; uint level3; uint level4;
-  uint tiles_x; uint samples; uint field_on; uint tiles; uint seed_lo; uint seed_hi;
+  uint tiles_x; uint samples; uint field_on; uint tiles; uint seed_lo; uint seed_hi; uint next; uint parent;
 } p;
 
 const int kMaxCand = R1_MAX_CANDIDATES;  // build() substitutes the cap
-const int kMaxStack = 192;
 const double kNear = 1e-3LF;
 
 double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
@@ -114,7 +113,6 @@ uint cand_node[kMaxCand];
 double cand_t0[kMaxCand];
 double cand_t1[kMaxCand];
 bool cand_agg[kMaxCand];
-uint stack_[kMaxStack];
 
 void main() {
   uint x = gl_GlobalInvocationID.x, row = gl_GlobalInvocationID.y, y = p.y0 + row;
@@ -142,47 +140,50 @@ void main() {
   bool march = p.field_on != 0u && t_end > kNear;
   if (march) {
     double grow = cutoff * field_sigma(t_end);
-    int sp = 0;
     uint tile = (y / 16u) * p.tiles_x + x / 16u;
-    if (p.tiles != 0u && tile < p.tiles) {
-      for (uint k = idx[p.top_ptr + tile + 1u]; k > idx[p.top_ptr + tile]; --k) {
-        if (sp == kMaxStack) { over = true; break; }
-        stack_[sp++] = p.level3 + idx[p.top + k - 1u];
-      }
-    } else {
-      for (uint g = p.level4; g > p.level3; --g) {
-        if (sp == kMaxStack) { over = true; break; }
-        stack_[sp++] = g - 1u;
-      }
-    }
+    bool from_tile = p.tiles != 0u && tile < p.tiles;
+    uint r_begin = from_tile ? idx[p.top_ptr + tile] : p.level3;
+    uint r_end = from_tile ? idx[p.top_ptr + tile + 1u] : p.level4;
     a = t_end; b = kNear;
-    while (sp > 0 && !over) {
-      uint g = stack_[--sp];
-      double w = node[g * 8u];
-      if (!(w > 0.0LF)) continue;
-      dvec3 c = nvec(g, 1u);
-      double extent = node[g * 8u + 7u];
-      // ray_ball within [kNear, t_end]
-      precise dvec3 oc = dvec3(pos.x - c.x, pos.y - c.y, pos.z - c.z);
-      precise double rr = extent + grow;
-      precise double bb = dotp(d, oc);
-      precise double disc = bb * bb - (dotp(oc, oc) - rr * rr);
-      if (disc < 0.0LF) continue;
-      precise double q = sqrt(disc);
-      double t0 = max(kNear, -bb - q), t1 = min(t_end, -bb + q);
-      if (t0 > t1) continue;
-      uint lv = level_of(g);
-      bool agg = extent <= theta * field_sigma(t0);
-      if (agg || lv == 0u) {
-        if (nc == kMaxCand) { over = true; break; }
-        cand_node[nc] = g; cand_t0[nc] = t0; cand_t1[nc] = t1; cand_agg[nc] = agg; ++nc;
-        a = min(a, t0); b = max(b, t1);
-        continue;
-      }
-      uint c0 = idx[p.child_ptr + g - p.level1], c1 = idx[p.child_ptr + g - p.level1 + 1u];
-      for (uint k = c0; k < c1; ++k) {
-        if (sp == kMaxStack) { over = true; break; }
-        stack_[sp++] = idx[p.child + k];
+    // A depth-first walk of each root's subtree without a stack: down to the first child, else
+    // on to the next sibling, climbing to a parent's next sibling when a child list ends.
+    for (uint rk = r_begin; rk < r_end && !over; ++rk) {
+      uint root = from_tile ? p.level3 + idx[p.top + rk] : rk;
+      uint g = root;
+      while (true) {
+        bool descend = false;
+        double w = node[g * 8u];
+        if (w > 0.0LF) {
+          dvec3 c = nvec(g, 1u);
+          double extent = node[g * 8u + 7u];
+          // ray_ball within [kNear, t_end]
+          precise dvec3 oc = dvec3(pos.x - c.x, pos.y - c.y, pos.z - c.z);
+          precise double rr = extent + grow;
+          precise double bb = dotp(d, oc);
+          precise double disc = bb * bb - (dotp(oc, oc) - rr * rr);
+          if (disc >= 0.0LF) {
+            precise double q = sqrt(disc);
+            double t0 = max(kNear, -bb - q), t1 = min(t_end, -bb + q);
+            if (t0 <= t1) {
+              uint lv = level_of(g);
+              bool agg = extent <= theta * field_sigma(t0);
+              if (agg || lv == 0u) {
+                if (nc == kMaxCand) { over = true; break; }
+                cand_node[nc] = g; cand_t0[nc] = t0; cand_t1[nc] = t1; cand_agg[nc] = agg; ++nc;
+                a = min(a, t0); b = max(b, t1);
+              } else {
+                descend = idx[p.child_ptr + g - p.level1] < idx[p.child_ptr + g - p.level1 + 1u];
+              }
+            }
+          }
+        }
+        if (descend) {
+          g = idx[p.child + idx[p.child_ptr + g - p.level1]];
+          continue;
+        }
+        while (g != root && idx[p.next + g] == 0xffffffffu) g = idx[p.parent + g];
+        if (g == root) break;
+        g = idx[p.next + g];
       }
     }
     if (over) {
@@ -316,7 +317,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
     return Status::input("vulkan composite: the layers are not " + std::to_string(cam.width) + " x " + std::to_string(cam.height));
   const std::size_t nodes = field.nodes.size() / 8;
   if (field.level_offset[kLevels] != nodes || field.child_ptr.size() != nodes - field.level_offset[1] + 1 ||
-      field.member_ptr.size() != field.level_offset[1] + 1)
+      field.member_ptr.size() != field.level_offset[1] + 1 || field.next.size() != nodes || field.parent.size() != nodes)
     return Status::input("vulkan composite: the field's node tables do not match");
   // Every index table in one buffer, at the offsets the push constants give.
   std::vector<std::uint32_t> idx;
@@ -327,7 +328,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   };
   const std::uint32_t child_ptr = append(field.child_ptr), child = append(field.child), member_ptr = append(field.member_ptr),
                       top_ptr = append(field.top_ptr), top = append(field.top), splat_ptr = append(splats.tile_ptr),
-                      splat_list = append(splats.tile);
+                      splat_list = append(splats.tile), next = append(field.next), parent = append(field.parent);
   if (idx.empty()) idx.push_back(0);
   std::vector<double> prm(40, 0.0);
   const double camera[13] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z, cam.up.x,
@@ -361,12 +362,13 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   for (std::size_t y0 = 0; y0 < cam.height; y0 += band) {
     const std::size_t rows = std::min<std::size_t>(band, cam.height - y0), n = rows * cam.width, at = y0 * cam.width;
     R1_TRY(ctx_->buffer_write(buffers_[4], bytes_of(opaque.subspan(at * 4, n * 4)), 0));
-    const std::array<std::uint32_t, 22> push{cam.width, cam.height, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows),
+    const std::array<std::uint32_t, 24> push{cam.width, cam.height, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows),
                                              child_ptr, child, member_ptr, top_ptr, top, splat_ptr, splat_list,
                                              field.level_offset[0], field.level_offset[1], field.level_offset[2],
                                              field.level_offset[3], field.level_offset[4], field.tiles_x, field.samples,
                                              field.enabled ? 1u : 0u, static_cast<std::uint32_t>(field.top_ptr.empty() ? 0 : field.top_ptr.size() - 1),
-                                             static_cast<std::uint32_t>(field.seed), static_cast<std::uint32_t>(field.seed >> 32)};
+                                             static_cast<std::uint32_t>(field.seed), static_cast<std::uint32_t>(field.seed >> 32), next,
+                                             parent};
     std::array<std::uint8_t, sizeof push> push_bytes;
     std::memcpy(push_bytes.data(), push.data(), sizeof push);
     R1_TRY(ctx_->dispatch(pipeline_, slots, {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));

@@ -65,10 +65,18 @@ vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
       fd.nodes.insert(fd.nodes.end(), row, row + 8);
     }
   fd.child_ptr.push_back(0);
+  fd.next.assign(total, 0xffffffffu);
+  fd.parent.assign(total, 0xffffffffu);
   for (int l = 1; l < kLevels; ++l)
     for (std::uint32_t id = 0; id < s.nodes[static_cast<std::size_t>(l)].size(); ++id) {
-      for (std::uint32_t c : s.hierarchy->levels[static_cast<std::size_t>(l)][id].children)
-        fd.child.push_back(fd.level_offset[static_cast<std::size_t>(l - 1)] + c);
+      const auto& children = s.hierarchy->levels[static_cast<std::size_t>(l)][id].children;
+      const std::uint32_t self = fd.level_offset[static_cast<std::size_t>(l)] + id;
+      for (std::size_t k = 0; k < children.size(); ++k) {
+        const std::uint32_t c = fd.level_offset[static_cast<std::size_t>(l - 1)] + children[k];
+        fd.child.push_back(c);
+        fd.parent[c] = self;
+        if (k + 1 < children.size()) fd.next[c] = fd.level_offset[static_cast<std::size_t>(l - 1)] + children[k + 1];
+      }
       fd.child_ptr.push_back(static_cast<std::uint32_t>(fd.child.size()));
     }
   fd.member_ptr.push_back(0);

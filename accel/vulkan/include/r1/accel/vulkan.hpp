@@ -207,6 +207,7 @@ struct FieldData {
   std::vector<double> nodes;  // 8 doubles a node: weight (0: not in the field), centroid, colour, extent
   std::array<std::uint32_t, kLevels + 1> level_offset{};
   std::vector<std::uint32_t> child_ptr, child;  // per node of levels 1 and up (global index - level_offset[1]): children, global indices
+  std::vector<std::uint32_t> next, parent;      // per node: its next sibling and its parent (0xffffffff: none)
   std::vector<std::uint32_t> member_ptr;        // per level-0 node: its members in `members`
   std::vector<double> members;                  // 8 doubles a member: weight, position, colour, 0
   std::vector<std::uint32_t> top_ptr, top;      // per 16-pixel tile: the top-level node ids a ray may meet
@@ -225,9 +226,9 @@ struct SplatData {
 // The field and composite pass (R1-BKD-070): per pixel the reference's T-infinity march and its
 // front-to-back composite with the splats and the opaque layer (4 doubles a pixel: t, colour),
 // into RGBA (4 floats a pixel) and flow (3 floats a pixel, left empty when every pixel's is 0).
-// A ray that meets more candidate nodes than the shader holds (max_candidates, or a walk deeper
-// than its stack) is left to the host: its index is listed in host_pixels and its RGBA is not
-// written.
+// A ray that meets more candidate nodes than the shader holds (max_candidates) is left to the
+// host: its index is listed in host_pixels and its RGBA is not written. The walk needs no stack
+// (next-sibling and parent links).
 class CompositePass {
  public:
   // 64: with 160, lavapipe (Mesa 22.3) returned wrong samples for rays holding more than about 64
