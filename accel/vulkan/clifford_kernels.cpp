@@ -7,6 +7,7 @@
 #include <string>
 
 #include "r1/accel/vulkan.hpp"
+#include "shader_common.hpp"
 
 namespace r1::vk {
 
@@ -145,12 +146,6 @@ std::vector<std::uint8_t> words(T... w) {
   return b;
 }
 
-// Groups of 64 invocations for `count` elements, spread over y past the x limit.
-std::array<std::uint32_t, 3> groups_for(std::uint64_t count) {
-  const std::uint64_t g = std::max<std::uint64_t>(1, (count + 63) / 64);
-  const std::uint64_t x = std::min<std::uint64_t>(g, 65535);
-  return {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>((g + x - 1) / x), 1};
-}
 
 }  // namespace
 
@@ -203,7 +198,7 @@ Result<std::uint32_t> CliffordKernels::roll(std::uint32_t t, std::int32_t shift,
   if (x.n == 0) return out;
   const std::uint32_t s = mod(shift, axis == 1 ? x.d : x.n);
   const Slot slots[] = {{0, t}, {1, out}, {7, constants_}};
-  R1_TRY(ctx_->dispatch(roll_, slots, groups_for(std::uint64_t{x.n} * x.d), words(s, axis)));
+  R1_TRY(ctx_->dispatch(roll_, slots, detail::groups_for(std::uint64_t{x.n} * x.d), words(s, axis)));
   return out;
 }
 
@@ -228,7 +223,7 @@ Result<std::uint32_t> CliffordKernels::shifted(std::uint32_t h, std::uint32_t c,
   if (a.n == 0) return out;
   const Slot slots[] = {{0, h}, {1, c}, {2, sbuf}, {3, out}, {7, constants_}};
   const auto k = static_cast<std::uint32_t>(shifts.size());
-  const auto groups = groups_for(std::uint64_t{a.n} * k * a.d);
+  const auto groups = detail::groups_for(std::uint64_t{a.n} * k * a.d);
   if (width_factor == 1) {
     R1_TRY(ctx_->dispatch(shifted_, slots, groups, words(inner ? 0 : 1, k, 0, a.d)));
   } else {  // the Clifford features: Inner and Wedge interleaved per shift, 2 d columns each
@@ -264,7 +259,7 @@ Result<std::uint32_t> CliffordKernels::block(std::uint32_t h, std::uint32_t c, s
   R1_ASSIGN(const std::uint32_t g, tensor(a.n, a.d));
   R1_ASSIGN(const std::uint32_t out, tensor(a.n, a.d));
   if (a.n == 0) return out;
-  const auto groups = groups_for(std::uint64_t{a.n} * a.d);
+  const auto groups = detail::groups_for(std::uint64_t{a.n} * a.d);
   const Slot linear_slots[] = {{0, features}, {1, gate}, {2, g}, {7, constants_}};
   R1_TRY(ctx_->dispatch(linear_, linear_slots, groups, words(at[0], at[1])));
   const Slot residual_slots[] = {{0, h}, {1, g}, {2, gate}, {3, out}, {7, constants_}};

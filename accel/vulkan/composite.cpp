@@ -9,6 +9,7 @@
 #include <string>
 
 #include "r1/accel/vulkan.hpp"
+#include "shader_common.hpp"
 
 namespace r1::vk {
 
@@ -78,7 +79,8 @@ uint64_t rng_bits(uint64_t item, uint64_t dim) {
 }
 double uniform01(uint64_t item, uint64_t dim) { return double(rng_bits(item, dim) >> 11) * pow2(-53); }
 
-double dotp(dvec3 a, dvec3 b) { precise double r = a.x * b.x + a.y * b.y + a.z * b.z; return r; }
+#define CAMERA prm
+R1_PIXEL_RAY
 
 double field_sigma(double t) {
   precise double tm = max(t, 0.0LF);
@@ -120,15 +122,8 @@ void main() {
   uint px = row * p.width + x;
   uint64_t pixel = uint64_t(y) * uint64_t(p.width) + uint64_t(x);
   dvec3 pos = dvec3(prm[0], prm[1], prm[2]);
-  dvec3 right = dvec3(prm[3], prm[4], prm[5]);
-  dvec3 up = dvec3(prm[6], prm[7], prm[8]);
   dvec3 fwd = dvec3(prm[9], prm[10], prm[11]);
-  double focal = prm[12];
-  precise double sx = ((double(x) + 0.5LF) - double(p.width) * 0.5LF) / focal;
-  precise double sy = (double(p.height) * 0.5LF - (double(y) + 0.5LF)) / focal;
-  precise dvec3 dir = dvec3(fwd.x + right.x * sx + up.x * sy, fwd.y + right.y * sx + up.y * sy, fwd.z + right.z * sx + up.z * sy);
-  precise double dl = sqrt(dotp(dir, dir));
-  precise dvec3 d = dvec3(dir.x / dl, dir.y / dl, dir.z / dl);
+  dvec3 d = pixel_dir(x, y, p.width, p.height);
   double t_op = opaque[px * 4u];
   double kappa = prm[15], cutoff = prm[16], theta = prm[17], stop = prm[18];
 
@@ -289,11 +284,6 @@ void main() {
 }
 )";
 
-template <class T>
-std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
-  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
-}
-
 }  // namespace
 
 Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& constants, std::uint32_t max_candidates) {
@@ -303,8 +293,9 @@ Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& con
   pass.ctx_ = &ctx;
   pass.exp_ = constants;
   std::string source = kComposite;
-  const std::string key = "R1_MAX_CANDIDATES";
+  const std::string key = "R1_MAX_CANDIDATES", ray = "R1_PIXEL_RAY";
   source.replace(source.find(key), key.size(), std::to_string(max_candidates));
+  source.replace(source.find(ray), ray.size(), detail::kPixelRay);
   R1_ASSIGN(pass.pipeline_, ctx.compute_compile(source, "composite"));
   return pass;
 }
@@ -340,7 +331,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   std::copy(exp_.taylor.begin(), exp_.taylor.end(), prm.begin() + 23);
   const auto ensure_write = [&](std::size_t which, auto span) -> Status {
     R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
-    return ctx_->buffer_write(buffers_[which], bytes_of(span), 0);
+    return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);
   };
   const std::vector<double> one(8, 0.0);
   R1_TRY(ensure_write(0, std::span<const double>(field.nodes.empty() ? one : field.nodes)));
@@ -354,14 +345,14 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   R1_TRY(ctx_->buffer_ensure(buffers_[5], band * cam.width * 28));
   R1_TRY(ctx_->buffer_ensure(buffers_[7], 8));
   const std::uint32_t zero[2] = {0, 0};
-  R1_TRY(ctx_->buffer_write(buffers_[7], bytes_of(std::span<const std::uint32_t>(zero)), 0));
+  R1_TRY(ctx_->buffer_write(buffers_[7], detail::bytes_of(std::span<const std::uint32_t>(zero)), 0));
   Slot slots[8];
   for (std::uint32_t s = 0; s < 8; ++s) slots[s] = {s, buffers_[s]};
   std::vector<float> flows(pixels * 3, 0.0f);
   host_pixels.clear();
   for (std::size_t y0 = 0; y0 < cam.height; y0 += band) {
     const std::size_t rows = std::min<std::size_t>(band, cam.height - y0), n = rows * cam.width, at = y0 * cam.width;
-    R1_TRY(ctx_->buffer_write(buffers_[4], bytes_of(opaque.subspan(at * 4, n * 4)), 0));
+    R1_TRY(ctx_->buffer_write(buffers_[4], detail::bytes_of(opaque.subspan(at * 4, n * 4)), 0));
     const std::array<std::uint32_t, 24> push{cam.width, cam.height, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows),
                                              child_ptr, child, member_ptr, top_ptr, top, splat_ptr, splat_list,
                                              field.level_offset[0], field.level_offset[1], field.level_offset[2],

@@ -4,17 +4,18 @@
 #include <string>
 
 #include "r1/accel/vulkan.hpp"
+#include "shader_common.hpp"
 
 namespace r1::vk {
 
 namespace {
 
-// One invocation a row. The product of two int64 magnitudes from four 32-bit partial products;
-// the signed 128-bit sum in (hi, lo), two's complement; the result floor(sum / 2^32) plus the
-// round-half-even of the remainder, as fx::detail::rne_shift does.
-constexpr const char* kSpmv = R"(#version 460
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-layout(local_size_x = 64) in;
+constexpr const char* kVersion = "#version 460\n#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require\n";
+
+// One invocation a row (kWideInt's mul128 for each product). The signed 128-bit sum in (hi, lo),
+// two's complement; the result floor(sum / 2^32) plus the round-half-even of the remainder, as
+// fx::detail::rne_shift does.
+constexpr const char* kSpmv = R"(
 layout(std430, binding = 0) readonly buffer R { uint64_t row_ptr[]; };
 layout(std430, binding = 1) readonly buffer C { uint col[]; };
 layout(std430, binding = 2) readonly buffer V { int64_t val[]; };
@@ -23,18 +24,8 @@ layout(std430, binding = 4) writeonly buffer Y { int64_t y[]; };
 layout(std430, binding = 5) buffer F { uint first_overflow; };
 layout(push_constant) uniform P { uint rows; uint identity; } p;
 
-uint64_t magnitude(int64_t v) { return v < 0l ? uint64_t(-(v + 1l)) + 1ul : uint64_t(v); }
-
-void umul(uint64_t a, uint64_t b, out uint64_t hi, out uint64_t lo) {
-  uint64_t a0 = a & 0xfffffffful, a1 = a >> 32, b0 = b & 0xfffffffful, b1 = b >> 32;
-  uint64_t p00 = a0 * b0, p01 = a0 * b1, p10 = a1 * b0, p11 = a1 * b1;
-  uint64_t mid = (p00 >> 32) + (p01 & 0xfffffffful) + (p10 & 0xfffffffful);
-  lo = (mid << 32) | (p00 & 0xfffffffful);
-  hi = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
-}
-
 void main() {
-  uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+  uint i = invocation();
   if (i >= p.rows) return;
   uint b = uint(row_ptr[i]), e = uint(row_ptr[i + 1u]);
   if (b == e && p.identity != 0u) {
@@ -43,13 +34,8 @@ void main() {
   }
   uint64_t hi = 0ul, lo = 0ul;
   for (uint k = b; k < e; ++k) {
-    int64_t a = val[k], v = x[col[k]];
     uint64_t ph, pl;
-    umul(magnitude(a), magnitude(v), ph, pl);
-    if ((a < 0l) != (v < 0l)) {
-      pl = ~pl + 1ul;
-      ph = ~ph + (pl == 0ul ? 1ul : 0ul);
-    }
+    mul128(val[k], x[col[k]], ph, pl);
     uint64_t sum = lo + pl;
     hi += ph + (sum < lo ? 1ul : 0ul);
     lo = sum;
@@ -70,11 +56,6 @@ void main() {
 }
 )";
 
-template <class T>
-std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
-  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
-}
-
 }  // namespace
 
 Result<ExactSpmv> ExactSpmv::build(Context& ctx, std::span<const std::uint64_t> row_ptr, std::span<const std::uint32_t> col,
@@ -93,33 +74,30 @@ Result<ExactSpmv> ExactSpmv::build(Context& ctx, std::span<const std::uint64_t> 
   m.rows_ = static_cast<std::uint32_t>(rows);
   m.columns_ = std::max<std::uint32_t>(columns, empty_rows_identity ? m.rows_ : 0);
   m.identity_ = empty_rows_identity;
-  R1_ASSIGN(m.pipeline_, ctx.compute_compile(kSpmv, "exact_spmv"));
+  R1_ASSIGN(m.pipeline_, ctx.compute_compile(std::string(kVersion) + detail::kWideInt + kSpmv, "exact_spmv"));
   R1_ASSIGN(m.row_ptr_, ctx.buffer_create(row_ptr.size_bytes()));
   R1_ASSIGN(m.col_, ctx.buffer_create(col.size_bytes()));
   R1_ASSIGN(m.val_, ctx.buffer_create(val.size_bytes()));
   R1_ASSIGN(m.x_, ctx.buffer_create(std::size_t{m.columns_} * 8));
   R1_ASSIGN(m.y_, ctx.buffer_create(std::size_t{m.rows_} * 8));
   R1_ASSIGN(m.flag_, ctx.buffer_create(4));
-  R1_TRY(ctx.buffer_write(m.row_ptr_, bytes_of(row_ptr), 0));
-  R1_TRY(ctx.buffer_write(m.col_, bytes_of(col), 0));
-  R1_TRY(ctx.buffer_write(m.val_, bytes_of(val), 0));
+  R1_TRY(ctx.buffer_write(m.row_ptr_, detail::bytes_of(row_ptr), 0));
+  R1_TRY(ctx.buffer_write(m.col_, detail::bytes_of(col), 0));
+  R1_TRY(ctx.buffer_write(m.val_, detail::bytes_of(val), 0));
   return m;
 }
 
 Result<std::vector<std::int64_t>> ExactSpmv::apply(std::span<const std::int64_t> x) {
   if (x.size() != columns_)
     return Status::input("vulkan spmv: x has " + std::to_string(x.size()) + " entries for " + std::to_string(columns_) + " columns");
-  R1_TRY(ctx_->buffer_write(x_, bytes_of(x), 0));
+  R1_TRY(ctx_->buffer_write(x_, detail::bytes_of(x), 0));
   const std::uint32_t none = 0xffffffffu;
   R1_TRY(ctx_->buffer_write(flag_, std::span(reinterpret_cast<const std::uint8_t*>(&none), 4), 0));
-  const std::uint64_t groups = std::max<std::uint64_t>(1, (std::uint64_t{rows_} + 63) / 64);
-  const std::uint64_t gx = std::min<std::uint64_t>(groups, 65535);
   const Slot slots[] = {{0, row_ptr_}, {1, col_}, {2, val_}, {3, x_}, {4, y_}, {5, flag_}};
   std::uint32_t push[2] = {rows_, identity_ ? 1u : 0u};
   std::uint8_t push_bytes[8];
   std::memcpy(push_bytes, push, 8);
-  R1_TRY(ctx_->dispatch(pipeline_, slots, {static_cast<std::uint32_t>(gx), static_cast<std::uint32_t>((groups + gx - 1) / gx), 1},
-                        push_bytes));
+  R1_TRY(ctx_->dispatch(pipeline_, slots, detail::groups_for(rows_), push_bytes));
   R1_ASSIGN(const auto flag, ctx_->buffer_read(flag_, 0, 4));
   std::uint32_t first = 0;
   std::memcpy(&first, flag.data(), 4);

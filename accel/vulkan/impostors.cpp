@@ -11,6 +11,7 @@
 #include <string>
 
 #include "r1/accel/vulkan.hpp"
+#include "shader_common.hpp"
 
 namespace r1::vk {
 
@@ -82,8 +83,8 @@ void main() {
 }
 )";
 
-// The reference's ray-shape intersections (shapes.cpp) and the pixel ray (view.cpp), shared by
-// the compute and raster passes.
+// The reference's ray-shape intersections (shapes.cpp) and the headlight, shared by the compute
+// and raster passes (after kPixelRay).
 constexpr const char* kShapes = R"(
 const double kInvSqrt3 = 0.57735026918962576450914878050196LF;
 const double kInvSqrt2 = 0.70710678118654752440084436210485LF;
@@ -96,9 +97,6 @@ const int kPolishSteps = 8;
 
 double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
 double copysign_of(double m, double s) { return (unpackDouble2x32(s).y >> 31) != 0u ? -abs(m) : abs(m); }
-double dotp(dvec3 a, dvec3 b) { precise double r = a.x * b.x + a.y * b.y + a.z * b.z; return r; }
-double len(dvec3 a) { precise double r = sqrt(dotp(a, a)); return r; }
-dvec3 nrm(dvec3 a) { double l = len(a); precise dvec3 r = dvec3(a.x / l, a.y / l, a.z / l); return r; }
 
 int quadratic_roots(double a, double bh, double c, double disc, out double r0, out double r1) {
   r0 = 0.0LF; r1 = 0.0LF;
@@ -359,17 +357,6 @@ bool intersect(uint shape, dvec3 o, double r, dvec3 d, double tmin, double tmax,
 }
 
 
-dvec3 pixel_dir(uint x, uint y, uint width, uint height) {
-  dvec3 right = dvec3(cam[3], cam[4], cam[5]);
-  dvec3 up = dvec3(cam[6], cam[7], cam[8]);
-  dvec3 fwd = dvec3(cam[9], cam[10], cam[11]);
-  double focal = cam[12];
-  precise double sx = ((double(x) + 0.5LF) - double(width) * 0.5LF) / focal;
-  precise double sy = (double(height) * 0.5LF - (double(y) + 0.5LF)) / focal;
-  precise dvec3 dir = dvec3(fwd.x + right.x * sx + up.x * sy, fwd.y + right.y * sx + up.y * sy,
-                            fwd.z + right.z * sx + up.z * sy);
-  return nrm(dir);
-}
 
 dvec3 shade(uint i, dvec3 n, dvec3 d) {
   precise double l = -dotp(n, d);
@@ -407,11 +394,6 @@ void main() {
 }
 )";
 
-template <class T>
-std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
-  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
-}
-
 }  // namespace
 
 Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
@@ -419,10 +401,10 @@ Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
   pass.ctx_ = &ctx;
   pass.mode_ = mode;
   if (mode == Mode::kCompute) {
-    R1_ASSIGN(pass.pipeline_, ctx.compute_compile(std::string(kComputeHeader) + kShapes + kComputeMain, "impostors"));
+    R1_ASSIGN(pass.pipeline_, ctx.compute_compile(std::string(kComputeHeader) + "#define CAMERA cam\n" + detail::kPixelRay + kShapes + kComputeMain, "impostors"));
   } else {
     R1_ASSIGN(pass.pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexMain,
-                                                   std::string(kRasterBindings) + kShapes + kFragmentMain, "impostors"));
+                                                   std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + kShapes + kFragmentMain, "impostors"));
   }
   return pass;
 }
@@ -456,9 +438,9 @@ Status ImpostorPass::draw(const ImpostorCamera& cam, std::span<const ImpostorIte
   const double camera[16] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z,
                              cam.up.x,       cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z,
                              cam.focal_px,   0,              0,              0};
-  R1_TRY(upload(0, bytes_of(std::span<const double>(geo))));
-  R1_TRY(upload(1, bytes_of(std::span<const std::int32_t>(meta))));
-  R1_TRY(upload(7, bytes_of(std::span<const double>(camera))));
+  R1_TRY(upload(0, detail::bytes_of(std::span<const double>(geo))));
+  R1_TRY(upload(1, detail::bytes_of(std::span<const std::int32_t>(meta))));
+  R1_TRY(upload(7, detail::bytes_of(std::span<const double>(camera))));
   return mode_ == Mode::kCompute ? draw_compute(cam, items, t, color, owner) : draw_raster(cam, items, t, color, owner);
 }
 
@@ -480,8 +462,8 @@ Status ImpostorPass::draw_compute(const ImpostorCamera& cam, std::span<const Imp
   for (std::size_t k = 1; k < ptr.size(); ++k) ptr[k] += ptr[k - 1];
   std::vector<std::uint32_t> list(entries), fill(ptr.begin(), ptr.end() - 1);
   for (std::size_t i = 0; i < items.size(); ++i) tiles_of(items[i], [&](std::size_t k) { list[fill[k]++] = static_cast<std::uint32_t>(i); });
-  R1_TRY(upload(2, bytes_of(std::span<const std::uint32_t>(ptr))));
-  R1_TRY(upload(3, bytes_of(std::span<const std::uint32_t>(list))));
+  R1_TRY(upload(2, detail::bytes_of(std::span<const std::uint32_t>(ptr))));
+  R1_TRY(upload(3, detail::bytes_of(std::span<const std::uint32_t>(list))));
   // The image in bands of rows whose colour output fits one storage buffer.
   const std::size_t max_rows = std::max<std::size_t>(1, ctx_->info().max_buffer / (std::size_t{cam.width} * 3 * sizeof(double)));
   const std::size_t band_rows = std::min<std::size_t>(cam.height, max_rows);
@@ -519,8 +501,8 @@ Status ImpostorPass::draw_raster(const ImpostorCamera& cam, std::span<const Impo
   std::vector<std::uint32_t> instances(items.size());
   for (std::size_t i = 0; i < items.size(); ++i) instances[i] = static_cast<std::uint32_t>(i);
   const std::uint32_t args[4] = {6, static_cast<std::uint32_t>(items.size()), 0, 0};
-  R1_TRY(upload(2, bytes_of(std::span<const std::uint32_t>(instances))));
-  R1_TRY(upload(3, bytes_of(std::span<const std::uint32_t>(args))));
+  R1_TRY(upload(2, detail::bytes_of(std::span<const std::uint32_t>(instances))));
+  R1_TRY(upload(3, detail::bytes_of(std::span<const std::uint32_t>(args))));
   // Depth t / (2 t_far): every hit lies within the items' bounding spheres, so below 1/2.
   double far = 1;
   for (const ImpostorItem& it : items) {

@@ -9,6 +9,7 @@
 
 #include "r1/accel/vulkan_panel.hpp"
 #include "r1/solvers/exact_round.hpp"
+#include "shader_common.hpp"
 
 namespace r1::vk {
 
@@ -17,42 +18,7 @@ namespace {
 using spectral::Cols;
 using spectral::Panel;
 
-// Signed 64 x 64 -> 128-bit products and 192-bit two's complement sums in three limbs.
-constexpr const char* kWide = R"(#version 460
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-layout(local_size_x = 64) in;
-
-uint64_t magnitude(int64_t v) { return v < 0l ? uint64_t(-(v + 1l)) + 1ul : uint64_t(v); }
-
-// a * b as a signed 128-bit (hi, lo).
-void mul128(int64_t a, int64_t b, out uint64_t hi, out uint64_t lo) {
-  uint64_t x = magnitude(a), y = magnitude(b);
-  uint64_t x0 = x & 0xfffffffful, x1 = x >> 32, y0 = y & 0xfffffffful, y1 = y >> 32;
-  uint64_t p00 = x0 * y0, p01 = x0 * y1, p10 = x1 * y0, p11 = x1 * y1;
-  uint64_t mid = (p00 >> 32) + (p01 & 0xfffffffful) + (p10 & 0xfffffffful);
-  lo = (mid << 32) | (p00 & 0xfffffffful);
-  hi = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
-  if ((a < 0l) != (b < 0l)) {
-    lo = ~lo + 1ul;
-    hi = ~hi + (lo == 0ul ? 1ul : 0ul);
-  }
-}
-
-// s += the signed 128-bit (hi, lo), sign-extended to 192 bits.
-void add128(inout uint64_t s[3], uint64_t hi, uint64_t lo) {
-  uint64_t a = s[0] + lo;
-  uint64_t c0 = a < lo ? 1ul : 0ul;
-  uint64_t b = s[1] + hi;
-  uint64_t c1 = b < hi ? 1ul : 0ul;
-  uint64_t b2 = b + c0;
-  c1 += b2 < b ? 1ul : 0ul;
-  s[0] = a;
-  s[1] = b2;
-  s[2] += c1 + (int64_t(hi) < 0l ? ~0ul : 0ul);
-}
-
-uint invocation() { return gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u; }
-)";
+constexpr const char* kVersion = "#version 460\n#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require\n";
 
 // Inner products: invocation (pair, chunk) sums the products of rows [chunk c, chunk (c + 1)) of
 // the data's columns q and nq + w, pair = q nw + w, into 192 bits.
@@ -124,11 +90,6 @@ void main() {
 
 constexpr std::uint32_t kChunk = 256;  // rows an inner-product invocation sums
 
-template <class T>
-std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
-  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
-}
-
 // The pipelines and buffers one context's kernels share; calls are serialised.
 struct Shared {
   std::shared_ptr<Context> ctx;
@@ -137,12 +98,6 @@ struct Shared {
   std::mutex lock;
 };
 
-// groups for `count` invocations of 64, in two dimensions past the device's 65535 per axis.
-std::array<std::uint32_t, 3> groups_for(std::uint64_t count) {
-  const std::uint64_t groups = std::max<std::uint64_t>(1, (count + 63) / 64);
-  const std::uint64_t gx = std::min<std::uint64_t>(groups, 65535);
-  return {static_cast<std::uint32_t>(gx), static_cast<std::uint32_t>((groups + gx - 1) / gx), 1};
-}
 
 template <std::size_t N>
 std::array<std::uint8_t, N * 4> push_of(const std::array<std::uint32_t, N>& words) {
@@ -183,13 +138,13 @@ class VulkanPanelOps final : public spectral::PanelOps<fx::Q32> {
       const std::size_t rows = std::min(band, size() - r0), chunks = (rows + kChunk - 1) / kChunk;
       const std::vector<std::int64_t> data = gather(p, r0, rows, qs, ws);
       ok(ctx.buffer_ensure(s_->data, data.size() * 8));
-      ok(ctx.buffer_write(s_->data, bytes_of(std::span<const std::int64_t>(data)), 0));
+      ok(ctx.buffer_write(s_->data, detail::bytes_of(std::span<const std::int64_t>(data)), 0));
       ok(ctx.buffer_ensure(s_->partial, pairs * chunks * 24));
       const std::array<std::uint32_t, 6> push{static_cast<std::uint32_t>(rows), static_cast<std::uint32_t>(k),
                                               static_cast<std::uint32_t>(nq), static_cast<std::uint32_t>(nw), kChunk,
                                               static_cast<std::uint32_t>(chunks)};
       const Slot slots[] = {{0, s_->data}, {3, s_->partial}};
-      ok(ctx.dispatch(s_->dots, slots, groups_for(pairs * chunks), push_of(push)));
+      ok(ctx.dispatch(s_->dots, slots, detail::groups_for(pairs * chunks), push_of(push)));
       auto bytes = ctx.buffer_read(s_->partial, 0, pairs * chunks * 24);
       ok(bytes.status());
       for (std::size_t pr = 0; pr < pairs; ++pr)
@@ -213,7 +168,7 @@ class VulkanPanelOps final : public spectral::PanelOps<fx::Q32> {
     std::lock_guard<std::mutex> guard(s_->lock);
     Context& ctx = *s_->ctx;
     ok(ctx.buffer_ensure(s_->coef, std::max<std::size_t>(coef.size() * 8, 8)));
-    ok(ctx.buffer_write(s_->coef, bytes_of(std::span<const std::int64_t>(coef)), 0));
+    ok(ctx.buffer_write(s_->coef, detail::bytes_of(std::span<const std::int64_t>(coef)), 0));
     ok(ctx.buffer_ensure(s_->flag, 4));
     const std::size_t per_row = std::max(k, no) * 8;
     const std::size_t band = std::max<std::size_t>(1, ctx.info().max_buffer / per_row);
@@ -223,7 +178,7 @@ class VulkanPanelOps final : public spectral::PanelOps<fx::Q32> {
       const std::size_t rows = std::min(band, size() - r0);
       const std::vector<std::int64_t> data = gather(p, r0, rows, terms, bases);
       ok(ctx.buffer_ensure(s_->data, std::max<std::size_t>(data.size() * 8, 8)));
-      ok(ctx.buffer_write(s_->data, bytes_of(std::span<const std::int64_t>(data)), 0));
+      ok(ctx.buffer_write(s_->data, detail::bytes_of(std::span<const std::int64_t>(data)), 0));
       ok(ctx.buffer_ensure(s_->result, rows * no * 8));
       const std::uint32_t none = 0xffffffffu;
       ok(ctx.buffer_write(s_->flag, std::span(reinterpret_cast<const std::uint8_t*>(&none), 4), 0));
@@ -231,7 +186,7 @@ class VulkanPanelOps final : public spectral::PanelOps<fx::Q32> {
                                               static_cast<std::uint32_t>(nt), static_cast<std::uint32_t>(no),
                                               bases.empty() ? 0u : 1u, static_cast<std::uint32_t>(r0)};
       const Slot slots[] = {{0, s_->data}, {1, s_->coef}, {4, s_->result}, {5, s_->flag}};
-      ok(ctx.dispatch(s_->combine, slots, groups_for(rows * no), push_of(push)));
+      ok(ctx.dispatch(s_->combine, slots, detail::groups_for(rows * no), push_of(push)));
       auto flag = ctx.buffer_read(s_->flag, 0, 4);
       ok(flag.status());
       std::uint32_t first = 0;
@@ -264,8 +219,8 @@ class VulkanPanelOps final : public spectral::PanelOps<fx::Q32> {
 Result<Q32KernelFactory> panel_kernel_factory(std::shared_ptr<Context> ctx) {
   auto shared = std::make_shared<Shared>();
   shared->ctx = std::move(ctx);
-  R1_ASSIGN(shared->dots, shared->ctx->compute_compile(std::string(kWide) + kDots, "spectral_dots"));
-  R1_ASSIGN(shared->combine, shared->ctx->compute_compile(std::string(kWide) + kCombine, "spectral_combine"));
+  R1_ASSIGN(shared->dots, shared->ctx->compute_compile(std::string(kVersion) + detail::kWideInt + kDots, "spectral_dots"));
+  R1_ASSIGN(shared->combine, shared->ctx->compute_compile(std::string(kVersion) + detail::kWideInt + kCombine, "spectral_combine"));
   return Q32KernelFactory([shared](std::size_t n, int e, bool parallel, int frac) -> std::unique_ptr<spectral::PanelOps<fx::Q32>> {
     return std::make_unique<VulkanPanelOps>(shared, n, e, parallel, frac);
   });

@@ -1,0 +1,85 @@
+// What accel/vulkan's kernels share (internal): the host side of a dispatch, and GLSL snippets
+// that several shaders need, written once.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <span>
+
+namespace r1::vk::detail {
+
+template <class T>
+std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
+  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
+}
+
+// Workgroups of 64 invocations for `count` elements, spread over y past the 65535 of x; the
+// shader's element is invocation() of kWideInt (or the same expression).
+inline std::array<std::uint32_t, 3> groups_for(std::uint64_t count) {
+  const std::uint64_t g = std::max<std::uint64_t>(1, (count + 63) / 64);
+  const std::uint64_t x = std::min<std::uint64_t>(g, 65535);
+  return {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>((g + x - 1) / x), 1};
+}
+
+// Exact integer arithmetic for 64-invocation compute shaders (after #version and the int64
+// extension): magnitude, the signed 64 x 64 -> 128-bit product in (hi, lo), a signed 128-bit
+// term added to a 192-bit two's complement sum, and the invocation's element index.
+inline constexpr const char* kWideInt = R"(
+layout(local_size_x = 64) in;
+
+uint64_t magnitude(int64_t v) { return v < 0l ? uint64_t(-(v + 1l)) + 1ul : uint64_t(v); }
+
+// a * b as a signed 128-bit (hi, lo): four 32-bit partial products of the magnitudes.
+void mul128(int64_t a, int64_t b, out uint64_t hi, out uint64_t lo) {
+  uint64_t x = magnitude(a), y = magnitude(b);
+  uint64_t x0 = x & 0xfffffffful, x1 = x >> 32, y0 = y & 0xfffffffful, y1 = y >> 32;
+  uint64_t p00 = x0 * y0, p01 = x0 * y1, p10 = x1 * y0, p11 = x1 * y1;
+  uint64_t mid = (p00 >> 32) + (p01 & 0xfffffffful) + (p10 & 0xfffffffful);
+  lo = (mid << 32) | (p00 & 0xfffffffful);
+  hi = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
+  if ((a < 0l) != (b < 0l)) {
+    lo = ~lo + 1ul;
+    hi = ~hi + (lo == 0ul ? 1ul : 0ul);
+  }
+}
+
+// s += the signed 128-bit (hi, lo), sign-extended to 192 bits.
+void add128(inout uint64_t s[3], uint64_t hi, uint64_t lo) {
+  uint64_t a = s[0] + lo;
+  uint64_t c0 = a < lo ? 1ul : 0ul;
+  uint64_t b = s[1] + hi;
+  uint64_t c1 = b < hi ? 1ul : 0ul;
+  uint64_t b2 = b + c0;
+  c1 += b2 < b ? 1ul : 0ul;
+  s[0] = a;
+  s[1] = b2;
+  s[2] += c1 + (int64_t(hi) < 0l ? ~0ul : 0ul);
+}
+
+uint invocation() { return gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u; }
+)";
+
+// The reference's vector helpers and primary ray (render::pixel_ray) in fp64, every value
+// `precise`. The shader defines CAMERA as a double array holding the camera position, right,
+// up, forward and focal_px at 0..12.
+inline constexpr const char* kPixelRay = R"(
+double dotp(dvec3 a, dvec3 b) { precise double r = a.x * b.x + a.y * b.y + a.z * b.z; return r; }
+double len(dvec3 a) { precise double r = sqrt(dotp(a, a)); return r; }
+dvec3 nrm(dvec3 a) { double l = len(a); precise dvec3 r = dvec3(a.x / l, a.y / l, a.z / l); return r; }
+
+// The unit direction through pixel centre (x + 0.5, y + 0.5) of a width x height image.
+dvec3 pixel_dir(uint x, uint y, uint width, uint height) {
+  dvec3 right = dvec3(CAMERA[3], CAMERA[4], CAMERA[5]);
+  dvec3 up = dvec3(CAMERA[6], CAMERA[7], CAMERA[8]);
+  dvec3 fwd = dvec3(CAMERA[9], CAMERA[10], CAMERA[11]);
+  double focal = CAMERA[12];
+  precise double sx = ((double(x) + 0.5LF) - double(width) * 0.5LF) / focal;
+  precise double sy = (double(height) * 0.5LF - (double(y) + 0.5LF)) / focal;
+  precise dvec3 dir = dvec3(fwd.x + right.x * sx + up.x * sy, fwd.y + right.y * sx + up.y * sy,
+                            fwd.z + right.z * sx + up.z * sy);
+  return nrm(dir);
+}
+)";
+
+}  // namespace r1::vk::detail
