@@ -6,12 +6,15 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "backend_option.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/epoch_io.hpp"
+#include "render/neural_field.hpp"
 #include "render/renderer.hpp"
 #include "timing.hpp"
 
@@ -27,8 +30,42 @@ struct RenderCliOptions {
   std::vector<double> eye, target, up;
   double fov = 0, time = 0, distance = 0;
   bool no_edges = false, no_labels = false, no_field = false, quiet = false;
+  std::string field = "analytic", field_file;
   BackendOption backend;
 };
+
+struct TrainFieldOptions {
+  std::string dir, out;
+  render::NeuralConfig config;
+  bool quiet = false;
+};
+
+// The trained field's default place: beside the epoch's files (R1-NRF-030).
+std::string field_path(const std::string& dir, const std::string& given) {
+  return given.empty() ? (fs::path(dir) / "field.nrf").string() : given;
+}
+
+Status run_train_field(const TrainFieldOptions& o) {
+  ProgressLine progress;
+  const auto t0 = std::chrono::steady_clock::now();
+  R1_ASSIGN(const Epoch e, read_epoch(o.dir));
+  if (e.ids.empty()) return Status::input(o.dir + ": the epoch has no particles");
+  const render::Scene scene = render::make_scene(e);
+  const auto t1 = std::chrono::steady_clock::now();
+  R1_ASSIGN(const render::NeuralField f,
+            render::train_neural_field(scene, o.config, render::neural_seed(e.snapshot_digest), progress.sink()));
+  const double train_s = seconds_since(t1);
+  progress.finish();
+  const std::string path = field_path(o.dir, o.out);
+  const std::string bytes = render::encode_neural_field(f, e.snapshot_digest);
+  R1_TRY(write_file_atomic(path, bytes));
+  if (!o.quiet)
+    std::printf("%s: neural field, %u levels x 2^%u entries, %u hidden, %zu bytes; %u steps of %u over %u samples in %.2f s "
+                "(loss %.4g -> %.4g); %.2f s in all\n",
+                path.c_str(), f.config.levels, f.config.log2_table, f.config.hidden, bytes.size(), f.config.steps,
+                f.config.batch, f.config.samples, train_s, f.loss_first, f.loss_last, seconds_since(t0));
+  return Status::ok();
+}
 
 Status parse_size(const std::string& text, render::View& v) {
   const auto x = text.find('x');
@@ -88,7 +125,21 @@ Status run_render(const RenderCliOptions& c) {
   if (e.ids.empty()) return Status::input(c.dir + ": the epoch has no particles");
   // The cameras are placed from the reference's scene summary (centroid, fitted distance); the
   // frames are the chosen backend's (R1-BKD-016).
-  const render::Scene scene = render::make_scene(e);
+  render::Scene scene = render::make_scene(e);
+  // --field neural (R1-NRF-031): the trained field draws pure T-infinity frames, with the
+  // reference renderer (no backend's passes draw it yet).
+  if (c.field != "analytic" && c.field != "neural") return Status::input("render: --field must be analytic or neural");
+  render::NeuralField neural;
+  const bool use_neural = c.field == "neural";
+  if (use_neural) {
+    if (chosen.name != "reference") return Status::input("render: --field neural is drawn by the reference renderer only (got --backend " + chosen.name + ")");
+    const std::string path = field_path(c.dir, c.field_file);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return Status::input(path + ": cannot read the neural field (make it with r1 train-field " + c.dir + ")");
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    R1_ASSIGN(neural, render::decode_neural_field(bytes, path, e.snapshot_digest));
+    scene.neural = &neural;
+  }
 
   render::View base;
   if (!c.view_file.empty()) {
@@ -128,7 +179,9 @@ Status run_render(const RenderCliOptions& c) {
     const ProgressFn rows = [&](std::string_view, std::uint64_t d, std::uint64_t t) {
       if (sink) sink(stage, d, t);
     };
-    R1_ASSIGN(render::Image img, chosen.backend->render(e, views[k], {}, &st, rows));
+    Result<render::Image> frame = use_neural ? render::render_frame(scene, views[k], {}, &st, rows)
+                                             : chosen.backend->render(e, views[k], {}, &st, rows);
+    R1_ASSIGN(render::Image img, std::move(frame));
     images.push_back(std::move(img));
     stats.push_back(st);
   }
@@ -137,6 +190,9 @@ Status run_render(const RenderCliOptions& c) {
     const fs::path path = frame_path(c.out, static_cast<int>(k), static_cast<int>(views.size()));
     R1_TRY(render::write_image(images[k], path, render::srgb8_to_linear(views[k].background)));
     if (!c.quiet) print_stats(path, views[k], stats[k]);
+    if (!c.quiet && use_neural)
+      std::printf("  field: %s\n", stats[k].field_neural > 0 ? "neural"
+                                      : "analytic (the frame is not pure T-infinity, R1-NRF-031)");
   }
   if (!c.quiet) std::printf("%zu image%s in %.2f s\n", views.size(), views.size() == 1 ? "" : "s", seconds_since(t0));
   return Status::ok();
@@ -162,9 +218,24 @@ void add_render(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-edges", c->no_edges, "draw no edges");
   cmd->add_flag("--no-labels", c->no_labels, "draw no T1 labels");
   cmd->add_flag("--no-field", c->no_field, "no T-infinity field (sub-pixel particles vanish)");
+  cmd->add_option("--field", c->field, "T-infinity field: analytic (the oracle, default) or neural (trained by r1 train-field)");
+  cmd->add_option("--field-file", c->field_file, "the trained field (default: EPOCH_DIR/field.nrf)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
   c->backend.add_to(*cmd);
   cmd->callback([c, &selected] { selected = [c] { return run_render(*c); }; });
+}
+
+void add_train_field(CLI::App& app, Runner& selected) {
+  auto o = std::make_shared<TrainFieldOptions>();
+  auto* cmd = app.add_subcommand("train-field", "train the T-infinity neural field of an epoch on its analytic field");
+  cmd->add_option("EPOCH_DIR", o->dir, "epoch directory written by r1 epoch")->required();
+  cmd->add_option("-o,--out", o->out, "output file (default: EPOCH_DIR/field.nrf)");
+  cmd->add_option("--steps", o->config.steps, "Adam steps (default 200)")->check(CLI::Range(1u, 1000000u));
+  cmd->add_option("--samples", o->config.samples, "training points (default 65536)")->check(CLI::Range(1u, 1u << 24));
+  cmd->add_option("--batch", o->config.batch, "points per step (default 4096)")->check(CLI::Range(1u, 1u << 20));
+  cmd->add_option("--threads", o->config.threads, "worker threads (default: every core; same bytes)");
+  cmd->add_flag("-q,--quiet", o->quiet, "no summary");
+  cmd->callback([o, &selected] { selected = [o] { return run_train_field(*o); }; });
 }
 
 }  // namespace r1::cli

@@ -26,6 +26,7 @@ void add_export(CLI::App& app, Runner& selected);
 void add_epoch(CLI::App& app, Runner& selected);
 void add_spectrum(CLI::App& app, Runner& selected);
 void add_render(CLI::App& app, Runner& selected);
+void add_train_field(CLI::App& app, Runner& selected);
 void add_golden(CLI::App& app, Runner& selected);
 void add_conform(CLI::App& app, Runner& selected);
 void add_diff(CLI::App& app, Runner& selected);

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   r1::cli::add_export(app, selected);
   r1::cli::add_spectrum(app, selected);
   r1::cli::add_render(app, selected);
+  r1::cli::add_train_field(app, selected);
   r1::cli::add_golden(app, selected);
   r1::cli::add_conform(app, selected);
   r1::cli::add_diff(app, selected);

@@ -71,6 +71,10 @@ TEST_F(CliRender, BadInputIsOneLineExitTwoAndWritesNothing) {
       {"render", epoch().string(), "--eye", "1", "1", "1", "--target", "1", "1", "1", "-o", at("x.png").string()},
       {"render", at("nothing").string(), "-o", at("x.png").string()},
       {"render", epoch().string(), "--bogus", "-o", at("x.png").string()},
+      {"render", epoch().string(), "--field", "fancy", "-o", at("x.png").string()},
+      {"render", epoch().string(), "--field", "neural", "--field-file", at("missing.nrf").string(), "-o", at("x.png").string()},
+      {"train-field", at("nothing").string(), "-o", at("x.nrf").string()},
+      {"train-field", epoch().string(), "--steps", "0", "-o", at("x.nrf").string()},
   };
   for (const auto& args : cases) {
     const auto r = run_cli(args);
@@ -79,6 +83,38 @@ TEST_F(CliRender, BadInputIsOneLineExitTwoAndWritesNothing) {
   }
   EXPECT_FALSE(fs::exists(at("x.png")));
   EXPECT_FALSE(fs::exists(at("x.jpg")));
+  EXPECT_FALSE(fs::exists(at("x.nrf")));
+}
+
+// spec/neural.md: r1 train-field writes the same bytes twice; r1 render --field neural draws a
+// pure T-infinity view with it (and says so), and falls back to the analytic field, saying why,
+// when the view is not pure; a damaged field file is a one-line error.
+TEST_F(CliRender, TrainFieldAndRenderWithIt) {
+  const std::vector<std::string> train = {"train-field", epoch().string(), "--samples", "4096", "--batch", "1024",
+                                          "--steps", "20", "-q", "-o", at("f1.nrf").string()};
+  auto r = run_cli(train);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> again = train;
+  again.back() = at("f2.nrf").string();
+  again.insert(again.end() - 2, {"--threads", "1"});
+  r = run_cli(again);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r1::test::read_file(at("f1.nrf")), r1::test::read_file(at("f2.nrf")));
+  r = run_cli({"render", epoch().string(), "--distance", "200000", "--size", "48x32", "--field", "neural", "--field-file",
+               at("f1.nrf").string(), "-o", at("far.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("field: neural"), std::string::npos) << r.out;
+  r = run_cli({"render", epoch().string(), "--size", "48x32", "--field", "neural", "--field-file", at("f1.nrf").string(), "-o",
+               at("near.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("field: analytic (the frame is not pure"), std::string::npos) << r.out;
+  std::string bytes = r1::test::read_file(at("f1.nrf"));
+  r1::test::write_file(at("cut.nrf"), bytes.substr(0, bytes.size() - 100));
+  r = run_cli({"render", epoch().string(), "--size", "48x32", "--field", "neural", "--field-file", at("cut.nrf").string(), "-o",
+               at("cut.png").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("cut.nrf"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(at("cut.png")));
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "neural_field.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 
 namespace r1::render {
@@ -260,6 +261,9 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   const FieldParams& p = ff.params;
   const double t_end = std::min(t_max, ff.t_far);
   if (!(t_end > kNear)) return;
+  // The neural field stands for the far field with every particle at weight n phi, so it draws
+  // only frames that are pure T-infinity (no node mixed with nearer tiers, R1-NRF-031).
+  const bool neural = s.neural != nullptr && ff.mixed.empty();
   const double grow = p.cutoff * field_sigma(ff, t_end);
   // Candidates: nodes whose box grown by the widest kernel on this ray meets the ray (R1-RND-057).
   struct Candidate {
@@ -328,6 +332,21 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     }
     const Vec3 x = ray.at(t);
     if (stats) ++stats->samples;
+    if (neural) {
+      // The neural field (R1-NRF-031): evaluated where some candidate is within reach, the same
+      // samples the analytic field would sum kernels at.
+      const bool near = std::any_of(active.begin(), active.end(), [&](const Candidate* c) {
+        return within_reach(x, c->node.centroid, c->node.extent, reach);
+      });
+      if (!near) continue;
+      const FieldValue v = s.neural->evaluate(x, sigma);
+      if (stats) ++stats->neural;
+      if (!(v.weight > 0)) continue;
+      const double alpha = 1.0 - std::exp(-v.density * delta);
+      out.push_back({t, alpha, v.color, v.flow});
+      transmittance *= 1.0 - alpha;
+      continue;
+    }
     Accumulator acc;
     for (const Candidate* cp : active) {
       const Candidate& c = *cp;

@@ -94,6 +94,7 @@ struct FieldRayStats {
   std::uint64_t candidates = 0;   // nodes the march considered (R1-RND-057)
   std::uint64_t samples = 0;      // samples evaluated (some node within reach of its interval)
   std::uint64_t evaluations = 0;  // kernel evaluations over all samples
+  std::uint64_t neural = 0;       // samples the neural field drew (R1-NRF-031)
 };
 
 // The stratified, jittered march of 7.2 along `ray` up to t_max (an opaque hit), samples

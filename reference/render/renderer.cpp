@@ -511,6 +511,7 @@ void composite(const CompositeInput& in, Image& image, FrameStats& st, const Pro
   st.field_samples = fs.samples;
   st.field_candidates = fs.candidates;
   st.field_evaluations = fs.evaluations;
+  st.field_neural = fs.neural;
 }
 
 // Labels at T1 (and T0, drawn as T1): title or hex prefix beside the particle, far ones first,

@@ -23,6 +23,8 @@ struct NodeData {
   std::uint32_t count = 0;  // member particles
 };
 
+struct NeuralField;
+
 struct Scene {
   std::uint32_t n = 0;
   std::vector<Vec3> position;      // X'(p) in scene units
@@ -40,6 +42,8 @@ struct Scene {
   double tau0 = 1;                 // finest heat-kernel scale of the hierarchy, scene units^2
   double median_radius = 1;
   std::uint64_t seed = 0;          // counter-based jitter seed: the snapshot digest's first 8 bytes
+  // The trained far field (R1-NRF-031), borrowed; null: the analytic field draws T-infinity.
+  const NeuralField* neural = nullptr;
 };
 
 // b(p) = clamp((n phi / 1)^(1/4), 0.6, 3): brighter particles carry more focus (R1-RND-014).

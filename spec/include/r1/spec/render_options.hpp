@@ -30,6 +30,7 @@ struct FrameStats {
   std::uint64_t edges_drawn = 0;       // tube instances after bundling
   std::uint64_t splats = 0, labels = 0;
   std::uint64_t field_walked = 0, field_candidates = 0, field_samples = 0, field_evaluations = 0;
+  std::uint64_t field_neural = 0;  // samples the neural field drew (R1-NRF-031)
   // Pixels a backend's field and composite pass left to the host (R1-RND-078).
   std::uint64_t host_pixels = 0;
   // Seconds per stage.

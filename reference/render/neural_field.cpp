@@ -1,0 +1,505 @@
+// The T-infinity neural field: hash-grid encoding, MLP, deterministic training on the analytic far
+// field, and its file (spec/neural.md R1-NRF-001..040).
+#include "neural_field.hpp"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "r1/fixedpoint/counter_rng.hpp"
+#include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/bytes.hpp"
+
+namespace r1::render {
+
+namespace {
+
+constexpr std::uint32_t kPrime1 = 2654435761u, kPrime2 = 805459861u;  // Mueller et al.'s hash
+constexpr std::uint32_t kChunk = 64;  // samples per gradient chunk: the fixed reduction order
+constexpr double kTauOctaves = 4096.0;  // tau_hi / tau_lo: kernels up to 64 times the finest (R1-NRF-001)
+constexpr double kCellsPerSigma = 0.5;  // finest level: a cell per two sigma_min (R1-NRF-002)
+
+// The entry of grid corner (x, y, z) at a level of `res` cells per side (R1-NRF-002): dense when
+// the (res + 1)^3 corners fit the table, else the spatial hash.
+std::uint32_t corner_index(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint32_t res, std::uint32_t table) {
+  const std::uint64_t side = std::uint64_t{res} + 1;
+  if (side * side * side <= table) return static_cast<std::uint32_t>(x + side * (y + side * z));
+  return (x ^ (y * kPrime1) ^ (z * kPrime2)) & (table - 1);
+}
+
+// Where a point falls at every level: 8 corner entries and weights each (R1-NRF-002).
+struct Encoding {
+  std::vector<std::uint32_t> index;  // levels x 8, absolute offsets into grid (entry * 2)
+  std::vector<float> weight;         // levels x 8
+  std::vector<float> mask;           // levels: the fade of levels finer than the kernel
+};
+
+double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
+double sigmoid(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+// The network's input: the cube coordinates of x and the tau feature (R1-NRF-003).
+struct Query {
+  double u[3];
+  double t;      // log2(tau / tau_lo) / log2(tau_hi / tau_lo), clamped to [0, 1]
+  double sigma;  // sqrt(tau) after the clamp, in cube units (size 1)
+};
+
+Query make_query(const NeuralField& f, const Vec3& x, double sigma) {
+  Query q;
+  const double p[3] = {x.x, x.y, x.z}, l[3] = {f.lo.x, f.lo.y, f.lo.z};
+  for (int k = 0; k < 3; ++k) q.u[k] = std::clamp((p[k] - l[k]) / f.size, 0.0, 1.0);
+  const double tau = std::clamp(sigma * sigma, f.tau_lo, f.tau_hi);
+  q.t = f.tau_hi > f.tau_lo ? std::log2(tau / f.tau_lo) / std::log2(f.tau_hi / f.tau_lo) : 0.0;
+  q.sigma = std::sqrt(tau) / f.size;
+  return q;
+}
+
+void encode(const NeuralField& f, const Query& q, Encoding& e, float* features) {
+  const std::uint32_t L = f.config.levels, table = 1u << f.config.log2_table;
+  e.index.resize(L * 8);
+  e.weight.resize(L * 8);
+  e.mask.resize(L);
+  for (std::uint32_t l = 0; l < L; ++l) {
+    const std::uint32_t res = f.resolution[l];
+    std::uint32_t i0[3];
+    double fr[3];
+    for (int k = 0; k < 3; ++k) {
+      const double p = q.u[k] * res;
+      const double fl = std::min(std::floor(p), static_cast<double>(res - 1));
+      i0[k] = static_cast<std::uint32_t>(fl);
+      fr[k] = p - fl;
+    }
+    float a = 0, b = 0;
+    for (std::uint32_t c = 0; c < 8; ++c) {
+      const std::uint32_t dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+      const double w = (dx ? fr[0] : 1 - fr[0]) * (dy ? fr[1] : 1 - fr[1]) * (dz ? fr[2] : 1 - fr[2]);
+      const std::uint32_t idx = (l * table + corner_index(i0[0] + dx, i0[1] + dy, i0[2] + dz, res, table)) * kNeuralFeatures;
+      e.index[l * 8 + c] = idx;
+      e.weight[l * 8 + c] = static_cast<float>(w);
+      a += static_cast<float>(w) * f.grid[idx];
+      b += static_cast<float>(w) * f.grid[idx + 1];
+    }
+    // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, 2 h / sigma) for cells of
+    // side h, so a wide kernel reads only the coarse levels that can hold its smooth field.
+    const float mask = static_cast<float>(std::min(1.0, 2.0 / (res * q.sigma)));
+    e.mask[l] = mask;
+    features[2 * l] = mask * a;
+    features[2 * l + 1] = mask * b;
+  }
+  features[2 * L] = static_cast<float>(q.t);
+}
+
+// One forward pass, keeping the activations for the backward pass.
+struct Activations {
+  std::vector<float> in, h1, h2;
+  float out[kNeuralOutputs];
+};
+
+void forward(const NeuralField& f, Activations& a) {
+  const std::uint32_t ni = f.inputs(), nh = f.config.hidden;
+  a.h1.resize(nh);
+  a.h2.resize(nh);
+  for (std::uint32_t j = 0; j < nh; ++j) {
+    float s = f.b1[j];
+    const float* w = &f.w1[j * ni];
+    for (std::uint32_t i = 0; i < ni; ++i) s += w[i] * a.in[i];
+    a.h1[j] = s > 0 ? s : 0;
+  }
+  for (std::uint32_t j = 0; j < nh; ++j) {
+    float s = f.b2[j];
+    const float* w = &f.w2[j * nh];
+    for (std::uint32_t i = 0; i < nh; ++i) s += w[i] * a.h1[i];
+    a.h2[j] = s > 0 ? s : 0;
+  }
+  for (std::uint32_t j = 0; j < kNeuralOutputs; ++j) {
+    float s = f.b3[j];
+    const float* w = &f.w3[j * nh];
+    for (std::uint32_t i = 0; i < nh; ++i) s += w[i] * a.h2[i];
+    a.out[j] = s;
+  }
+}
+
+// What the heads mean (R1-NRF-004): density s = softplus(o0) with kernel sum expm1(s), colour
+// 3 sigmoid(o1..3) (linear light times brightness, at most 3), flow sigma o4..6.
+FieldValue decode_outputs(const NeuralField& f, const float* o, double sigma) {
+  FieldValue v;
+  const double s = softplus(static_cast<double>(o[0]));
+  v.weight = std::expm1(s);
+  v.density = f.kappa / sigma * v.weight;
+  v.color = Vec3{3 * sigmoid(static_cast<double>(o[1])), 3 * sigmoid(static_cast<double>(o[2])), 3 * sigmoid(static_cast<double>(o[3]))};
+  v.flow = Vec3{static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
+  return v;
+}
+
+// A training point: the query and the analytic field's targets in the heads' units.
+struct Sample {
+  Query q;
+  float target[kNeuralOutputs];  // log1p(kernel sum), colour, flow / sigma
+  float weight_cf = 0;           // weight of the colour and flow terms: min(1, kernel sum)
+};
+
+double gaussian(std::uint64_t seed, std::uint64_t item, std::uint64_t dim) {
+  // Box-Muller on two counter draws (the first kept away from 0).
+  const double u1 = std::max(rng::uniform_double(seed, item, dim), 0x1p-53);
+  const double u2 = rng::uniform_double(seed, item, dim + 1);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+}
+
+template <class Body>
+void parallel_chunks(std::uint32_t count, Body&& body) {
+  tbb::parallel_for(std::uint32_t{0}, count, [&](std::uint32_t c) { body(c); });
+}
+
+struct Adam {
+  std::vector<float> m, v;
+  void resize(std::size_t n) {
+    m.assign(n, 0.0f);
+    v.assign(n, 0.0f);
+  }
+  static constexpr double b1 = 0.9, b2 = 0.99, eps = 1e-15;
+  double c1 = 1, c2 = 1;  // 1 - b1^t, 1 - b2^t
+  void begin_step(std::uint32_t t) {
+    c1 = 1 - std::pow(b1, t);
+    c2 = 1 - std::pow(b2, t);
+  }
+  // One step on entry k with gradient g (after begin_step of this step).
+  void step(float& p, std::size_t k, float g, double lr) {
+    const double gd = g;
+    m[k] = static_cast<float>(b1 * static_cast<double>(m[k]) + (1 - b1) * gd);
+    v[k] = static_cast<float>(b2 * static_cast<double>(v[k]) + (1 - b2) * gd * gd);
+    const double mh = static_cast<double>(m[k]) / c1, vh = static_cast<double>(v[k]) / c2;
+    p = static_cast<float>(static_cast<double>(p) - lr * mh / (std::sqrt(vh) + eps));
+  }
+};
+
+float init_uniform(std::uint64_t seed, std::uint64_t item, std::uint64_t dim, double bound) {
+  return static_cast<float>((2 * rng::uniform_double(seed, item, dim) - 1) * bound);
+}
+
+}  // namespace
+
+FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
+  thread_local Activations a;
+  thread_local Encoding e;
+  a.in.resize(inputs());
+  encode(*this, make_query(*this, x, sigma), e, a.in.data());
+  forward(*this, a);
+  return decode_outputs(*this, a.out, sigma);
+}
+
+std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
+  std::vector<std::uint8_t> m(snapshot_digest.begin(), snapshot_digest.end());
+  for (const char c : std::string_view("nrf")) m.push_back(static_cast<std::uint8_t>(c));
+  const hemera::Digest d = hemera::hash(m);
+  std::uint64_t s = 0;
+  for (int b = 0; b < 8; ++b) s |= static_cast<std::uint64_t>(d[static_cast<std::size_t>(b)]) << (8 * b);
+  return s;
+}
+
+FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
+  FieldFrame ff;
+  ff.scene = &s;
+  ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
+  return ff;
+}
+
+Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
+                                       const ProgressFn& progress) {
+  if (s.n == 0) return Status::input("train-field: the epoch has no particles");
+  if (c.levels < 1 || c.levels > 32 || c.log2_table < 4 || c.log2_table > 24 || c.hidden < 1 || c.hidden > 1024 ||
+      c.samples < 1 || c.batch < 1 || c.base_resolution < 1)
+    return Status::input("train-field: configuration out of range");
+  std::unique_ptr<tbb::global_control> limit;
+  if (c.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, c.threads);
+  NeuralField f;
+  f.config = c;
+  f.seed = seed;
+  // The cube: the positions' box grown by three widest kernels, made cubic (R1-NRF-001).
+  f.tau_lo = s.tau0;
+  f.tau_hi = s.tau0 * kTauOctaves;
+  Vec3 lo = s.position[0], hi = s.position[0];
+  for (const Vec3& p : s.position) {
+    lo = Vec3{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = Vec3{std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const double margin = 3 * std::sqrt(f.tau_hi);
+  f.size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 2 * margin;
+  const Vec3 mid = (lo + hi) * 0.5;
+  f.lo = mid - Vec3{f.size / 2, f.size / 2, f.size / 2};
+  // Resolutions: geometric from base_resolution to the finest kernel's (4 cells per sqrt(tau_lo)).
+  const double finest = std::clamp(kCellsPerSigma * f.size / std::sqrt(f.tau_lo), static_cast<double>(c.base_resolution), 4096.0);
+  f.resolution.resize(c.levels);
+  for (std::uint32_t l = 0; l < c.levels; ++l) {
+    const double t = c.levels > 1 ? static_cast<double>(l) / (c.levels - 1) : 0.0;
+    f.resolution[l] = static_cast<std::uint32_t>(std::floor(c.base_resolution * std::pow(finest / c.base_resolution, t)));
+  }
+  // Parameters from the counter-based generator (R1-NRF-020): grid entries uniform in +-1e-4,
+  // layers uniform in +-sqrt(6 / (fan_in + fan_out)).
+  const std::uint32_t table = 1u << c.log2_table, ni = f.inputs(), nh = c.hidden;
+  f.grid.resize(static_cast<std::size_t>(c.levels) * table * kNeuralFeatures);
+  for (std::size_t k = 0; k < f.grid.size(); ++k) f.grid[k] = init_uniform(seed, k, 0, 1e-4);
+  auto layer = [&](std::vector<float>& w, std::vector<float>& b, std::uint32_t out, std::uint32_t in, std::uint64_t dim) {
+    w.resize(static_cast<std::size_t>(out) * in);
+    b.assign(out, 0.0f);
+    const double bound = std::sqrt(6.0 / (in + out));
+    for (std::size_t k = 0; k < w.size(); ++k) w[k] = init_uniform(seed, k, dim, bound);
+  };
+  layer(f.w1, f.b1, nh, ni, 1);
+  layer(f.w2, f.b2, nh, nh, 2);
+  layer(f.w3, f.b3, kNeuralOutputs, nh, 3);
+
+  // The training set (R1-NRF-010): even points uniform in the cube, odd points a Gaussian step of
+  // width sigma from a particle drawn uniformly; tau log-uniform in [tau_lo, tau_hi]. Targets from
+  // the analytic far field.
+  const FieldFrame ff = far_field_frame(s);
+  std::vector<Sample> set(c.samples);
+  const std::uint64_t data_seed = seed ^ 0x6e72662d64617461u;  // "nrf-data"
+  constexpr std::uint32_t kTruthChunk = 1024;
+  const std::uint32_t truth_chunks = (c.samples + kTruthChunk - 1) / kTruthChunk;
+  report(progress, "train-field: samples of the analytic field", 0, c.samples);
+  parallel_chunks(truth_chunks, [&](std::uint32_t chunk) {
+    const std::uint32_t end = std::min(c.samples, (chunk + 1) * kTruthChunk);
+    for (std::uint32_t k = chunk * kTruthChunk; k < end; ++k) {
+      const double tau = f.tau_lo * std::pow(f.tau_hi / f.tau_lo, rng::uniform_double(data_seed, k, 0));
+      const double sigma = std::sqrt(tau);
+      Vec3 x;
+      if (k % 2 == 0) {
+        x = f.lo + Vec3{rng::uniform_double(data_seed, k, 1), rng::uniform_double(data_seed, k, 2),
+                        rng::uniform_double(data_seed, k, 3)} * f.size;
+      } else {
+        const auto p = std::min<std::uint32_t>(
+            s.n - 1, static_cast<std::uint32_t>(rng::uniform_double(data_seed, k, 1) * s.n));
+        x = s.position[p] + Vec3{gaussian(data_seed, k, 4), gaussian(data_seed, k, 6), gaussian(data_seed, k, 8)} * sigma;
+      }
+      const FieldValue v = field_hierarchical(ff, x, sigma);
+      Sample& smp = set[k];
+      smp.q = make_query(f, x, sigma);
+      smp.target[0] = static_cast<float>(std::log1p(v.weight));
+      smp.target[1] = static_cast<float>(v.color.x / 3);
+      smp.target[2] = static_cast<float>(v.color.y / 3);
+      smp.target[3] = static_cast<float>(v.color.z / 3);
+      smp.target[4] = static_cast<float>(v.flow.x / sigma);
+      smp.target[5] = static_cast<float>(v.flow.y / sigma);
+      smp.target[6] = static_cast<float>(v.flow.z / sigma);
+      smp.weight_cf = static_cast<float>(std::min(1.0, v.weight));
+    }
+  });
+  report(progress, "train-field: samples of the analytic field", c.samples, c.samples);
+
+  // Training (R1-NRF-011): batches in set order, gradients per chunk of kChunk samples, reduced
+  // in chunk order; Adam on the MLP and on the grid entries a batch touched.
+  const std::size_t nw1 = f.w1.size(), nw2 = f.w2.size(), nw3 = f.w3.size();
+  const std::size_t n_mlp = nw1 + nh + nw2 + nh + nw3 + kNeuralOutputs;
+  Adam adam_mlp, adam_grid;
+  adam_mlp.resize(n_mlp);
+  adam_grid.resize(f.grid.size());
+  std::vector<float> grid_grad(f.grid.size(), 0.0f);
+  std::vector<std::uint8_t> touched_mark(f.grid.size() / kNeuralFeatures, 0);
+  std::vector<std::uint32_t> touched;
+  const std::uint32_t chunks = (c.batch + kChunk - 1) / kChunk;
+  struct ChunkGrad {
+    std::vector<float> mlp;
+    std::vector<std::pair<std::uint32_t, std::array<float, 2>>> grid;
+    double loss = 0;
+  };
+  std::vector<ChunkGrad> cg(chunks);
+  for (ChunkGrad& g : cg) g.mlp.resize(n_mlp);
+  for (std::uint32_t step = 1; step <= c.steps; ++step) {
+    const std::uint64_t first = static_cast<std::uint64_t>(step - 1) * c.batch;
+    parallel_chunks(chunks, [&](std::uint32_t chunk) {
+      ChunkGrad& g = cg[chunk];
+      std::fill(g.mlp.begin(), g.mlp.end(), 0.0f);
+      g.grid.clear();
+      g.loss = 0;
+      float* gw1 = g.mlp.data();
+      float* gb1 = gw1 + nw1;
+      float* gw2 = gb1 + nh;
+      float* gb2 = gw2 + nw2;
+      float* gw3 = gb2 + nh;
+      float* gb3 = gw3 + nw3;
+      Activations a;
+      a.in.resize(ni);
+      Encoding e;
+      std::vector<float> d1(nh), d2(nh), din(ni);
+      const std::uint32_t end = std::min(c.batch, (chunk + 1) * kChunk);
+      for (std::uint32_t j = chunk * kChunk; j < end; ++j) {
+        const Sample& smp = set[(first + j) % c.samples];
+        encode(f, smp.q, e, a.in.data());
+        forward(f, a);
+        // Loss and its gradient at the outputs (means over the batch).
+        const double scale = 1.0 / c.batch;
+        float dout[kNeuralOutputs];
+        const double s0 = softplus(static_cast<double>(a.out[0]));
+        const double r0 = s0 - static_cast<double>(smp.target[0]);
+        double loss = r0 * r0;
+        dout[0] = static_cast<float>(2 * r0 * sigmoid(static_cast<double>(a.out[0])) * scale);
+        for (int k = 1; k <= 3; ++k) {
+          const double sg = sigmoid(static_cast<double>(a.out[k]));
+          const double r = sg - static_cast<double>(smp.target[k]);
+          loss += static_cast<double>(smp.weight_cf) * r * r;
+          dout[k] = static_cast<float>(2 * static_cast<double>(smp.weight_cf) * r * sg * (1 - sg) * scale);
+        }
+        for (int k = 4; k <= 6; ++k) {
+          const double r = static_cast<double>(a.out[k]) - static_cast<double>(smp.target[k]);
+          loss += static_cast<double>(smp.weight_cf) * r * r;
+          dout[k] = static_cast<float>(2 * static_cast<double>(smp.weight_cf) * r * scale);
+        }
+        g.loss += loss;
+        // Backward through the layers.
+        std::fill(d2.begin(), d2.end(), 0.0f);
+        for (std::uint32_t o = 0; o < kNeuralOutputs; ++o) {
+          gb3[o] += dout[o];
+          for (std::uint32_t i = 0; i < nh; ++i) {
+            gw3[o * nh + i] += dout[o] * a.h2[i];
+            d2[i] += dout[o] * f.w3[o * nh + i];
+          }
+        }
+        std::fill(d1.begin(), d1.end(), 0.0f);
+        for (std::uint32_t o = 0; o < nh; ++o) {
+          if (a.h2[o] <= 0) continue;
+          gb2[o] += d2[o];
+          for (std::uint32_t i = 0; i < nh; ++i) {
+            gw2[o * nh + i] += d2[o] * a.h1[i];
+            d1[i] += d2[o] * f.w2[o * nh + i];
+          }
+        }
+        std::fill(din.begin(), din.end(), 0.0f);
+        for (std::uint32_t o = 0; o < nh; ++o) {
+          if (a.h1[o] <= 0) continue;
+          gb1[o] += d1[o];
+          for (std::uint32_t i = 0; i < ni; ++i) {
+            gw1[o * ni + i] += d1[o] * a.in[i];
+            din[i] += d1[o] * f.w1[o * ni + i];
+          }
+        }
+        for (std::uint32_t l = 0; l < c.levels; ++l)
+          for (std::uint32_t k = 0; k < 8; ++k) {
+            const float w = e.weight[l * 8 + k] * e.mask[l];
+            g.grid.push_back({e.index[l * 8 + k], {w * din[2 * l], w * din[2 * l + 1]}});
+          }
+      }
+    });
+    // Reduce in chunk order.
+    std::vector<float> mlp_grad(n_mlp, 0.0f);
+    double loss = 0;
+    touched.clear();
+    for (const ChunkGrad& g : cg) {
+      for (std::size_t k = 0; k < n_mlp; ++k) mlp_grad[k] += g.mlp[k];
+      loss += g.loss;
+      for (const auto& [idx, gv] : g.grid) {
+        if (!touched_mark[idx / kNeuralFeatures]) {
+          touched_mark[idx / kNeuralFeatures] = 1;
+          touched.push_back(idx);
+        }
+        grid_grad[idx] += gv[0];
+        grid_grad[idx + 1] += gv[1];
+      }
+    }
+    loss /= c.batch;
+    if (step == 1) f.loss_first = loss;
+    f.loss_last = loss;
+    // Adam: the MLP in layer order, then the touched grid entries in first-touch order.
+    adam_mlp.begin_step(step);
+    adam_grid.begin_step(step);
+    std::size_t k = 0;
+    for (std::vector<float>* v : {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
+      for (float& p : *v) {
+        adam_mlp.step(p, k, mlp_grad[k], c.lr_mlp);
+        ++k;
+      }
+    for (const std::uint32_t idx : touched) {
+      for (std::uint32_t q = 0; q < kNeuralFeatures; ++q) {
+        adam_grid.step(f.grid[idx + q], idx + q, grid_grad[idx + q], c.lr_grid);
+        grid_grad[idx + q] = 0.0f;
+      }
+      touched_mark[idx / kNeuralFeatures] = 0;
+    }
+    report(progress, "train-field: Adam steps", step, c.steps);
+  }
+  return f;
+}
+
+// ---- file (R1-NRF-030) ------------------------------------------------------------------------
+
+namespace {
+constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\1'};
+void put_floats(std::string& out, const std::vector<float>& v) {
+  for (const float x : v) format::put_f32(out, x);
+}
+}  // namespace
+
+std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8_t> snapshot) {
+  std::string out(kMagic, sizeof kMagic);
+  format::put_bytes(out, snapshot);
+  const NeuralConfig& c = f.config;
+  for (const std::uint32_t v : {c.levels, c.log2_table, c.base_resolution, c.hidden, c.samples, c.batch, c.steps})
+    format::put_u32(out, v);
+  format::put_f64(out, c.lr_grid);
+  format::put_f64(out, c.lr_mlp);
+  for (const std::uint32_t r : f.resolution) format::put_u32(out, r);
+  for (const double v : {f.lo.x, f.lo.y, f.lo.z, f.size, f.tau_lo, f.tau_hi, f.kappa, f.loss_first, f.loss_last})
+    format::put_f64(out, v);
+  format::put_u64(out, f.seed);
+  for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
+  const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
+  format::put_bytes(out, d);
+  return out;
+}
+
+Result<NeuralField> decode_neural_field(std::string_view bytes, const std::string& name,
+                                        std::span<const std::uint8_t> snapshot) {
+  const std::size_t kDigest = sizeof(hemera::Digest);
+  if (bytes.size() < sizeof kMagic + kDigest || bytes.substr(0, sizeof kMagic) != std::string_view(kMagic, sizeof kMagic))
+    return Status::input(name + ": not an r1 neural field (r1-nrf version 1)");
+  const std::string_view body = bytes.substr(0, bytes.size() - kDigest);
+  const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(body.data()), body.size()));
+  if (!std::equal(d.begin(), d.end(), reinterpret_cast<const std::uint8_t*>(bytes.data() + body.size())))
+    return Status::input(name + ": digest mismatch (truncated or altered)");
+  format::ByteReader r(body, name);
+  r.skip(sizeof kMagic);
+  hemera::Digest snap{};
+  if (!r.bytes(snap)) return r.error("truncated");
+  if (snapshot.size() != snap.size() || !std::equal(snap.begin(), snap.end(), snapshot.begin()))
+    return r.error("trained for another snapshot");
+  NeuralField f;
+  NeuralConfig& c = f.config;
+  for (std::uint32_t* v : {&c.levels, &c.log2_table, &c.base_resolution, &c.hidden, &c.samples, &c.batch, &c.steps})
+    if (!r.u32(*v)) return r.error("truncated");
+  if (!r.f64(c.lr_grid) || !r.f64(c.lr_mlp)) return r.error("truncated");
+  if (c.levels < 1 || c.levels > 32 || c.log2_table < 4 || c.log2_table > 24 || c.hidden < 1 || c.hidden > 1024)
+    return r.error("architecture out of range");
+  f.resolution.resize(c.levels);
+  for (std::uint32_t& v : f.resolution)
+    if (!r.u32(v) || v < 1 || v > 65536) return r.error("bad resolution");
+  for (double* v : {&f.lo.x, &f.lo.y, &f.lo.z, &f.size, &f.tau_lo, &f.tau_hi, &f.kappa, &f.loss_first, &f.loss_last})
+    if (!r.f64(*v)) return r.error("truncated");
+  if (!(f.size > 0) || !(f.tau_lo > 0) || !(f.tau_hi >= f.tau_lo) || !std::isfinite(f.size) || !std::isfinite(f.tau_hi))
+    return r.error("bad cube or tau range");
+  if (!r.u64(f.seed)) return r.error("truncated");
+  const std::uint32_t ni = f.inputs(), nh = c.hidden;
+  const std::size_t sizes[7] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,
+                                static_cast<std::size_t>(nh) * ni, nh,
+                                static_cast<std::size_t>(nh) * nh, nh,
+                                static_cast<std::size_t>(kNeuralOutputs) * nh, kNeuralOutputs};
+  std::vector<float>* dst[7] = {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3};
+  for (int k = 0; k < 7; ++k) {
+    if (r.left() < sizes[k] * 4) return r.error("truncated");
+    dst[k]->resize(sizes[k]);
+    for (float& x : *dst[k]) {
+      const std::string_view rest = r.rest();
+      x = std::bit_cast<float>(format::load_u32(rest.data()));
+      r.skip(4);
+      if (!std::isfinite(x)) return r.error("non-finite parameter");
+    }
+  }
+  if (r.left() != 0) return r.error("trailing bytes");
+  return f;
+}
+
+}  // namespace r1::render

@@ -1,0 +1,70 @@
+// The T-infinity neural field (R-1.0 7; spec/neural.md R1-NRF-001..040): a multiresolution hash
+// grid over the scene cube and a small MLP that maps (x, tau) to the analytic field's density,
+// colour and flow, trained per epoch on samples of the analytic field (the oracle, field.hpp).
+// 7.5's fall-back: no graph-context conditioning (r1 has no CT-0 model).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "field.hpp"
+#include "r1/spec/progress.hpp"
+#include "r1/spec/status.hpp"
+
+namespace r1::render {
+
+// Architecture and training (R1-NRF-001..021). The defaults are r1's profile.
+struct NeuralConfig {
+  std::uint32_t levels = 16;        // L hash-grid levels
+  std::uint32_t log2_table = 15;    // T = 2^15 entries per level (2 features each)
+  std::uint32_t base_resolution = 16;
+  std::uint32_t hidden = 64;        // two hidden layers of this width
+  std::uint32_t samples = 1u << 16; // training set: points of the scene cube and tau range
+  std::uint32_t batch = 1u << 12;
+  std::uint32_t steps = 200;
+  double lr_grid = 1e-2;            // Adam step of the hash-grid entries
+  double lr_mlp = 1e-2;             // Adam step of the MLP (R-1.0 7.3 says 1e-3: R1-NRF-011)
+  std::uint32_t threads = 0;        // 0: every core; the result does not depend on it
+};
+
+inline constexpr std::uint32_t kNeuralFeatures = 2;  // per hash-grid entry
+inline constexpr std::uint32_t kNeuralOutputs = 7;   // density, colour (3), flow (3)
+
+struct NeuralField {
+  NeuralConfig config;
+  std::vector<std::uint32_t> resolution;  // per level: grid cells per cube side
+  Vec3 lo;                                // the cube [lo, lo + size]^3 the grid covers
+  double size = 1;
+  double tau_lo = 1, tau_hi = 1;          // the trained tau range; queries clamp to it
+  double kappa = 0.25;                    // R1-RND-052's density gain
+  std::uint64_t seed = 0;                 // R1-NRF-020
+  std::vector<float> grid;                // levels x 2^log2_table x 2
+  std::vector<float> w1, b1, w2, b2, w3, b3;  // row-major: w1 is hidden x inputs
+  double loss_first = 0, loss_last = 0;   // mean training loss of the first and last step
+
+  std::uint32_t inputs() const { return config.levels * kNeuralFeatures + 1; }
+  // The field at x with kernel width sigma (tau = sigma^2), as field_hierarchical returns it
+  // (weight: the kernel sum the density head predicts).
+  FieldValue evaluate(const Vec3& x, double sigma) const;
+};
+
+// The training seed (R1-NRF-020): the first 8 bytes of Hemera(snapshot digest || "nrf").
+std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest);
+
+// Trains the field of a scene from its analytic far field (every particle at field weight n phi).
+Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
+                                       const ProgressFn& progress = {});
+
+// The analytic far field the field is trained on: every node at its scene aggregate.
+FieldFrame far_field_frame(const Scene& s, const FieldParams& p = {});
+
+// File bytes (R1-NRF-030) and back; `snapshot` is the digest of the snapshot the epoch was made from (R1-NRF-030).
+std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8_t> snapshot);
+Result<NeuralField> decode_neural_field(std::string_view bytes, const std::string& name,
+                                        std::span<const std::uint8_t> snapshot);
+
+}  // namespace r1::render
