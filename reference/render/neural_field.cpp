@@ -3,7 +3,10 @@
 #include "neural_field.hpp"
 
 #include <tbb/global_control.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include <Eigen/Core>
 
 #include <algorithm>
 #include <bit>
@@ -86,7 +89,8 @@ void encode(const NeuralField& f, const Query& q, Encoding& e, float* features) 
     }
     // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, 2 h / sigma) for cells of
     // side h, so a wide kernel reads only the coarse levels that can hold its smooth field.
-    const float mask = static_cast<float>(std::min(1.0, 2.0 / (res * q.sigma)));
+    const double fade = 2.0 / (res * q.sigma);
+    const float mask = static_cast<float>(std::min(1.0, fade * fade));
     e.mask[l] = mask;
     features[2 * l] = mask * a;
     features[2 * l + 1] = mask * b;
@@ -94,34 +98,18 @@ void encode(const NeuralField& f, const Query& q, Encoding& e, float* features) 
   features[2 * L] = static_cast<float>(q.t);
 }
 
-// One forward pass, keeping the activations for the backward pass.
-struct Activations {
-  std::vector<float> in, h1, h2;
-  float out[kNeuralOutputs];
-};
+using Mat = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using Row = Eigen::Matrix<float, 1, Eigen::Dynamic>;
 
-void forward(const NeuralField& f, Activations& a) {
-  const std::uint32_t ni = f.inputs(), nh = f.config.hidden;
-  a.h1.resize(nh);
-  a.h2.resize(nh);
-  for (std::uint32_t j = 0; j < nh; ++j) {
-    float s = f.b1[j];
-    const float* w = &f.w1[j * ni];
-    for (std::uint32_t i = 0; i < ni; ++i) s += w[i] * a.in[i];
-    a.h1[j] = s > 0 ? s : 0;
-  }
-  for (std::uint32_t j = 0; j < nh; ++j) {
-    float s = f.b2[j];
-    const float* w = &f.w2[j * nh];
-    for (std::uint32_t i = 0; i < nh; ++i) s += w[i] * a.h1[i];
-    a.h2[j] = s > 0 ? s : 0;
-  }
-  for (std::uint32_t j = 0; j < kNeuralOutputs; ++j) {
-    float s = f.b3[j];
-    const float* w = &f.w3[j * nh];
-    for (std::uint32_t i = 0; i < nh; ++i) s += w[i] * a.h2[i];
-    a.out[j] = s;
-  }
+// The network on the rows of X (one point a row), keeping the activations the backward pass
+// needs: H1, H2 after their ReLU, O the raw outputs. Training and rendering both run it.
+void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
+  const auto ni = static_cast<Eigen::Index>(f.inputs()), nh = static_cast<Eigen::Index>(f.config.hidden);
+  const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
+  const Eigen::Map<const Row> B1(f.b1.data(), nh), B2(f.b2.data(), nh), B3(f.b3.data(), kNeuralOutputs);
+  H1 = ((X * W1.transpose()).rowwise() + B1).cwiseMax(0.0f);
+  H2 = ((H1 * W2.transpose()).rowwise() + B2).cwiseMax(0.0f);
+  O = (H2 * W3.transpose()).rowwise() + B3;
 }
 
 // What the heads mean (R1-NRF-004): density s = softplus(o0) with kernel sum expm1(s), colour
@@ -161,19 +149,17 @@ struct Adam {
     m.assign(n, 0.0f);
     v.assign(n, 0.0f);
   }
-  static constexpr double b1 = 0.9, b2 = 0.99, eps = 1e-15;
-  double c1 = 1, c2 = 1;  // 1 - b1^t, 1 - b2^t
-  void begin_step(std::uint32_t t) {
-    c1 = 1 - std::pow(b1, t);
-    c2 = 1 - std::pow(b2, t);
+  static constexpr float b1 = 0.9f, b2 = 0.99f, eps = 1e-15f;
+  float step_size = 0, inv_c2 = 1;  // lr / (1 - b1^t), 1 / (1 - b2^t)
+  void begin_step(std::uint32_t t, double lr) {
+    step_size = static_cast<float>(lr / (1 - std::pow(static_cast<double>(b1), t)));
+    inv_c2 = static_cast<float>(1 / (1 - std::pow(static_cast<double>(b2), t)));
   }
-  // One step on entry k with gradient g (after begin_step of this step).
-  void step(float& p, std::size_t k, float g, double lr) {
-    const double gd = g;
-    m[k] = static_cast<float>(b1 * static_cast<double>(m[k]) + (1 - b1) * gd);
-    v[k] = static_cast<float>(b2 * static_cast<double>(v[k]) + (1 - b2) * gd * gd);
-    const double mh = static_cast<double>(m[k]) / c1, vh = static_cast<double>(v[k]) / c2;
-    p = static_cast<float>(static_cast<double>(p) - lr * mh / (std::sqrt(vh) + eps));
+  // One step on entry k with gradient g (after begin_step of this step), in float.
+  void step(float& p, std::size_t k, float g) {
+    m[k] = b1 * m[k] + (1 - b1) * g;
+    v[k] = b2 * v[k] + (1 - b2) * g * g;
+    p -= step_size * m[k] / (std::sqrt(v[k] * inv_c2) + eps);
   }
 };
 
@@ -184,12 +170,12 @@ float init_uniform(std::uint64_t seed, std::uint64_t item, std::uint64_t dim, do
 }  // namespace
 
 FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
-  thread_local Activations a;
+  thread_local Mat X, H1, H2, O;
   thread_local Encoding e;
-  a.in.resize(inputs());
-  encode(*this, make_query(*this, x, sigma), e, a.in.data());
-  forward(*this, a);
-  return decode_outputs(*this, a.out, sigma);
+  X.resize(1, inputs());
+  encode(*this, make_query(*this, x, sigma), e, X.row(0).data());
+  forward(*this, X, H1, H2, O);
+  return decode_outputs(*this, O.row(0).data(), sigma);
 }
 
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
@@ -292,134 +278,167 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   });
   report(progress, "train-field: samples of the analytic field", c.samples, c.samples);
 
-  // Training (R1-NRF-011): batches in set order, gradients per chunk of kChunk samples, reduced
-  // in chunk order; Adam on the MLP and on the grid entries a batch touched.
+  double head_weight[kNeuralOutputs] = {1, 1, 1, 1, 1, 1, 1};
+  // The output biases start at the training set's means (R1-NRF-020), in set order: the heads
+  // then learn the variation from the first step instead of spending steps on the offset.
+  {
+    double mean[kNeuralOutputs] = {};
+    double cw = 0;
+    for (const Sample& smp : set) {
+      mean[0] += static_cast<double>(smp.target[0]);
+      for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] += static_cast<double>(smp.weight_cf) * static_cast<double>(smp.target[k]);
+      cw += static_cast<double>(smp.weight_cf);
+    }
+    mean[0] /= static_cast<double>(set.size());
+    for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] = cw > 0 ? mean[k] / cw : 0.0;
+    f.b3[0] = static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
+    for (std::uint32_t k = 1; k <= 3; ++k) {
+      const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
+      f.b3[k] = static_cast<float>(std::log(m / (1 - m)));
+    }
+    for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mean[k]);
+    // Each head's squared error is divided by its targets' variance over the set (R1-NRF-011), so
+    // the colour (a few hundredths) weighs as much as the density (a few units) in the loss.
+    double var[kNeuralOutputs] = {};
+    for (const Sample& smp : set) {
+      const double d0 = static_cast<double>(smp.target[0]) - mean[0];
+      var[0] += d0 * d0;
+      for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) {
+        const double d = static_cast<double>(smp.target[k]) - mean[k];
+        var[k] += static_cast<double>(smp.weight_cf) * d * d;
+      }
+    }
+    var[0] /= static_cast<double>(set.size());
+    for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) var[k] = cw > 0 ? var[k] / cw : 0.0;
+    for (std::uint32_t k = 0; k < kNeuralOutputs; ++k) head_weight[k] = 1.0 / std::max(var[k], 1e-6);
+  }
+
+  // Training (R1-NRF-011): batches in set order; per chunk of kChunk points one pass of matrix
+  // products forward and back, gradients reduced in chunk order; Adam on the MLP and on the grid
+  // entries a batch touched.
   const std::size_t nw1 = f.w1.size(), nw2 = f.w2.size(), nw3 = f.w3.size();
   const std::size_t n_mlp = nw1 + nh + nw2 + nh + nw3 + kNeuralOutputs;
   Adam adam_mlp, adam_grid;
   adam_mlp.resize(n_mlp);
   adam_grid.resize(f.grid.size());
   std::vector<float> grid_grad(f.grid.size(), 0.0f);
-  std::vector<std::uint8_t> touched_mark(f.grid.size() / kNeuralFeatures, 0);
-  std::vector<std::uint32_t> touched;
+  std::vector<std::uint8_t> touched(f.grid.size() / kNeuralFeatures, 0);
   const std::uint32_t chunks = (c.batch + kChunk - 1) / kChunk;
+  // The grid is stepped in fixed index ranges, each range applying the chunks' entries in it in
+  // chunk order; a chunk files its entries by range as it makes them.
+  constexpr std::size_t kRanges = 64;
+  const std::size_t entries = f.grid.size() / kNeuralFeatures, per_range = (entries + kRanges - 1) / kRanges;
   struct ChunkGrad {
     std::vector<float> mlp;
-    std::vector<std::pair<std::uint32_t, std::array<float, 2>>> grid;
+    std::array<std::vector<std::pair<std::uint32_t, std::array<float, 2>>>, kRanges> grid;
     double loss = 0;
   };
   std::vector<ChunkGrad> cg(chunks);
   for (ChunkGrad& g : cg) g.mlp.resize(n_mlp);
   for (std::uint32_t step = 1; step <= c.steps; ++step) {
     const std::uint64_t first = static_cast<std::uint64_t>(step - 1) * c.batch;
+    const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
     parallel_chunks(chunks, [&](std::uint32_t chunk) {
       ChunkGrad& g = cg[chunk];
-      std::fill(g.mlp.begin(), g.mlp.end(), 0.0f);
-      g.grid.clear();
+      for (auto& bucket : g.grid) bucket.clear();
       g.loss = 0;
-      float* gw1 = g.mlp.data();
-      float* gb1 = gw1 + nw1;
-      float* gw2 = gb1 + nh;
-      float* gb2 = gw2 + nw2;
-      float* gw3 = gb2 + nh;
-      float* gb3 = gw3 + nw3;
-      Activations a;
-      a.in.resize(ni);
-      Encoding e;
-      std::vector<float> d1(nh), d2(nh), din(ni);
-      const std::uint32_t end = std::min(c.batch, (chunk + 1) * kChunk);
-      for (std::uint32_t j = chunk * kChunk; j < end; ++j) {
-        const Sample& smp = set[(first + j) % c.samples];
-        encode(f, smp.q, e, a.in.data());
-        forward(f, a);
-        // Loss and its gradient at the outputs (means over the batch).
-        const double scale = 1.0 / c.batch;
-        float dout[kNeuralOutputs];
-        const double s0 = softplus(static_cast<double>(a.out[0]));
+      const std::uint32_t begin = chunk * kChunk, end = std::min(c.batch, (chunk + 1) * kChunk);
+      const Eigen::Index rows = end - begin;
+      Mat X(rows, ni), H1, H2, O, dO(rows, kNeuralOutputs);
+      std::vector<Encoding> enc(static_cast<std::size_t>(rows));
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % c.samples];
+        encode(f, smp.q, enc[static_cast<std::size_t>(r)], X.row(r).data());
+      }
+      forward(f, X, H1, H2, O);
+      // Loss and its gradient at the outputs (means over the batch).
+      const double scale = 1.0 / c.batch;
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % c.samples];
+        const double s0 = softplus(static_cast<double>(O(r, 0)));
         const double r0 = s0 - static_cast<double>(smp.target[0]);
-        double loss = r0 * r0;
-        dout[0] = static_cast<float>(2 * r0 * sigmoid(static_cast<double>(a.out[0])) * scale);
+        double loss = head_weight[0] * r0 * r0;
+        dO(r, 0) = static_cast<float>(2 * head_weight[0] * r0 * sigmoid(static_cast<double>(O(r, 0))) * scale);
         for (int k = 1; k <= 3; ++k) {
-          const double sg = sigmoid(static_cast<double>(a.out[k]));
-          const double r = sg - static_cast<double>(smp.target[k]);
-          loss += static_cast<double>(smp.weight_cf) * r * r;
-          dout[k] = static_cast<float>(2 * static_cast<double>(smp.weight_cf) * r * sg * (1 - sg) * scale);
+          const double sg = sigmoid(static_cast<double>(O(r, k)));
+          const double d = sg - static_cast<double>(smp.target[k]);
+          const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
+          loss += wk * d * d;
+          dO(r, k) = static_cast<float>(2 * wk * d * sg * (1 - sg) * scale);
         }
         for (int k = 4; k <= 6; ++k) {
-          const double r = static_cast<double>(a.out[k]) - static_cast<double>(smp.target[k]);
-          loss += static_cast<double>(smp.weight_cf) * r * r;
-          dout[k] = static_cast<float>(2 * static_cast<double>(smp.weight_cf) * r * scale);
+          const double d = static_cast<double>(O(r, k)) - static_cast<double>(smp.target[k]);
+          const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
+          loss += wk * d * d;
+          dO(r, k) = static_cast<float>(2 * wk * d * scale);
         }
         g.loss += loss;
-        // Backward through the layers.
-        std::fill(d2.begin(), d2.end(), 0.0f);
-        for (std::uint32_t o = 0; o < kNeuralOutputs; ++o) {
-          gb3[o] += dout[o];
-          for (std::uint32_t i = 0; i < nh; ++i) {
-            gw3[o * nh + i] += dout[o] * a.h2[i];
-            d2[i] += dout[o] * f.w3[o * nh + i];
-          }
-        }
-        std::fill(d1.begin(), d1.end(), 0.0f);
-        for (std::uint32_t o = 0; o < nh; ++o) {
-          if (a.h2[o] <= 0) continue;
-          gb2[o] += d2[o];
-          for (std::uint32_t i = 0; i < nh; ++i) {
-            gw2[o * nh + i] += d2[o] * a.h1[i];
-            d1[i] += d2[o] * f.w2[o * nh + i];
-          }
-        }
-        std::fill(din.begin(), din.end(), 0.0f);
-        for (std::uint32_t o = 0; o < nh; ++o) {
-          if (a.h1[o] <= 0) continue;
-          gb1[o] += d1[o];
-          for (std::uint32_t i = 0; i < ni; ++i) {
-            gw1[o * ni + i] += d1[o] * a.in[i];
-            din[i] += d1[o] * f.w1[o * ni + i];
-          }
-        }
+      }
+      // Backward: layer gradients as matrix products, ReLU masks from the activations.
+      Eigen::Map<Mat> gW1(g.mlp.data(), nh, ni), gW2(g.mlp.data() + nw1 + nh, nh, nh),
+          gW3(g.mlp.data() + nw1 + nh + nw2 + nh, kNeuralOutputs, nh);
+      Eigen::Map<Row> gB1(g.mlp.data() + nw1, nh), gB2(g.mlp.data() + nw1 + nh + nw2, nh),
+          gB3(g.mlp.data() + nw1 + nh + nw2 + nh + nw3, kNeuralOutputs);
+      gW3.noalias() = dO.transpose() * H2;
+      gB3 = dO.colwise().sum();
+      const Mat dH2 = ((dO * W3).array() * (H2.array() > 0.0f).cast<float>()).matrix();
+      gW2.noalias() = dH2.transpose() * H1;
+      gB2 = dH2.colwise().sum();
+      const Mat dH1 = ((dH2 * W2).array() * (H1.array() > 0.0f).cast<float>()).matrix();
+      gW1.noalias() = dH1.transpose() * X;
+      gB1 = dH1.colwise().sum();
+      const Mat dX = dH1 * W1;
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const Encoding& e = enc[static_cast<std::size_t>(r)];
         for (std::uint32_t l = 0; l < c.levels; ++l)
           for (std::uint32_t k = 0; k < 8; ++k) {
             const float w = e.weight[l * 8 + k] * e.mask[l];
-            g.grid.push_back({e.index[l * 8 + k], {w * din[2 * l], w * din[2 * l + 1]}});
+            const std::uint32_t idx = e.index[l * 8 + k];
+            g.grid[idx / kNeuralFeatures / per_range].push_back({idx, {w * dX(r, 2 * l), w * dX(r, 2 * l + 1)}});
           }
       }
     });
-    // Reduce in chunk order.
-    std::vector<float> mlp_grad(n_mlp, 0.0f);
     double loss = 0;
-    touched.clear();
-    for (const ChunkGrad& g : cg) {
-      for (std::size_t k = 0; k < n_mlp; ++k) mlp_grad[k] += g.mlp[k];
-      loss += g.loss;
-      for (const auto& [idx, gv] : g.grid) {
-        if (!touched_mark[idx / kNeuralFeatures]) {
-          touched_mark[idx / kNeuralFeatures] = 1;
-          touched.push_back(idx);
-        }
-        grid_grad[idx] += gv[0];
-        grid_grad[idx + 1] += gv[1];
-      }
-    }
+    for (const ChunkGrad& g : cg) loss += g.loss;
     loss /= c.batch;
     if (step == 1) f.loss_first = loss;
     f.loss_last = loss;
-    // Adam: the MLP in layer order, then the touched grid entries in first-touch order.
-    adam_mlp.begin_step(step);
-    adam_grid.begin_step(step);
-    std::size_t k = 0;
+    adam_mlp.begin_step(step, c.lr_mlp);
+    adam_grid.begin_step(step, c.lr_grid);
+    // The MLP: every parameter's gradient summed over the chunks in chunk order, then its step.
+    std::vector<float*> params;
+    params.reserve(n_mlp);
     for (std::vector<float>* v : {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
-      for (float& p : *v) {
-        adam_mlp.step(p, k, mlp_grad[k], c.lr_mlp);
-        ++k;
+      for (float& p : *v) params.push_back(&p);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_mlp, 512), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        float gsum = 0.0f;
+        for (const ChunkGrad& g : cg) gsum += g.mlp[k];
+        adam_mlp.step(*params[k], k, gsum);
       }
-    for (const std::uint32_t idx : touched) {
-      for (std::uint32_t q = 0; q < kNeuralFeatures; ++q) {
-        adam_grid.step(f.grid[idx + q], idx + q, grid_grad[idx + q], c.lr_grid);
-        grid_grad[idx + q] = 0.0f;
+    });
+    // The grid: each index range adds the chunks' entries that fall in it, in chunk order, then
+    // steps the entries it touched.
+    tbb::parallel_for(std::size_t{0}, kRanges, [&](std::size_t range) {
+      std::vector<std::uint32_t> mine;
+      for (const ChunkGrad& g : cg)
+        for (const auto& [idx, gv] : g.grid[range]) {
+          const std::size_t entry = idx / kNeuralFeatures;
+          if (!touched[entry]) {
+            touched[entry] = 1;
+            mine.push_back(idx);
+          }
+          grid_grad[idx] += gv[0];
+          grid_grad[idx + 1] += gv[1];
+        }
+      for (const std::uint32_t idx : mine) {
+        for (std::uint32_t q = 0; q < kNeuralFeatures; ++q) {
+          adam_grid.step(f.grid[idx + q], idx + q, grid_grad[idx + q]);
+          grid_grad[idx + q] = 0.0f;
+        }
+        touched[idx / kNeuralFeatures] = 0;
       }
-      touched_mark[idx / kNeuralFeatures] = 0;
-    }
+    });
     report(progress, "train-field: Adam steps", step, c.steps);
   }
   return f;
