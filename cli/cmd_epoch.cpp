@@ -17,6 +17,8 @@
 #include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/incremental.hpp"
+#include "render/neural_field.hpp"
+#include "render/scene.hpp"
 
 namespace r1::cli {
 
@@ -36,6 +38,8 @@ struct EpochCliOptions {
   std::string overlay = "none", overlay_file;
   bool no_role_shapes = false;
   bool no_timings = false;
+  bool field = false;
+  std::uint32_t field_steps = render::NeuralConfig{}.steps;
   bool parallel = false;
   bool quiet = false;
   // Incremental epochs (spec/incremental.md): the earlier epoch and the update's settings.
@@ -164,8 +168,20 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   e.timings.insert(e.timings.begin(), {"read", read_s});
   // Reading and checking the earlier epoch (every file against its digest) is part of the update.
   if (!c.from.empty()) e.timings.insert(e.timings.begin() + 1, {"previous", previous_s});
-  const auto t2 = std::chrono::steady_clock::now();
   EpochWriteOptions wo;
+  if (c.field) {
+    // The T-infinity neural field (R1-NRF-030): trained on the epoch's analytic far field, written
+    // with the epoch and listed in its manifest.
+    const auto t3 = std::chrono::steady_clock::now();
+    const render::Scene scene = render::make_scene(e);
+    render::NeuralConfig nc;
+    nc.steps = c.field_steps;
+    R1_ASSIGN(const render::NeuralField f,
+              render::train_neural_field(scene, nc, render::neural_seed(e.snapshot_digest), progress.sink()));
+    wo.extra.emplace_back("field.nrf", render::encode_neural_field(f, e.snapshot_digest));
+    e.timings.push_back({"field", seconds_since(t3)});
+  }
+  const auto t2 = std::chrono::steady_clock::now();
   wo.timings = !c.no_timings;
   R1_TRY(write_epoch(e, c.out, wo));
   e.timings.push_back({"write", seconds_since(t2)});
@@ -199,6 +215,8 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_option("--overlay", c->overlay, "none (default), crystal-v5 or custom");
   cmd->add_option("--overlay-file", c->overlay_file, "TOML lookup tables for --overlay custom");
   cmd->add_flag("--no-role-shapes", c->no_role_shapes, "all spheres instead of hub/bridge/leaf shapes");
+  cmd->add_flag("--field", c->field, "also train the T-infinity neural field (field.nrf, for r1 render --field neural)");
+  cmd->add_option("--field-steps", c->field_steps, "with --field: Adam steps (200)")->check(CLI::Range(1u, 1000000u));
   cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");
   cmd->add_flag("--parallel", c->parallel, "reference stages on every core: spectral, focus, encoding, hierarchy (same bits)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");

@@ -56,9 +56,14 @@ Status run_train_field(const TrainFieldOptions& o) {
             render::train_neural_field(scene, o.config, render::neural_seed(e.snapshot_digest), progress.sink()));
   const double train_s = seconds_since(t1);
   progress.finish();
-  const std::string path = field_path(o.dir, o.out);
   const std::string bytes = render::encode_neural_field(f, e.snapshot_digest);
-  R1_TRY(write_file_atomic(path, bytes));
+  // Into the epoch directory it is listed in the manifest like the epoch's own files (R1-NRF-030).
+  const std::string path = field_path(o.dir, o.out);
+  if (o.out.empty()) {
+    R1_TRY(add_epoch_file(o.dir, "field.nrf", bytes));
+  } else {
+    R1_TRY(write_file_atomic(path, bytes));
+  }
   if (!o.quiet)
     std::printf("%s: neural field, %u levels x 2^%u entries, %u hidden, %zu bytes; %u steps of %u over %u samples in %.2f s "
                 "(loss %.4g -> %.4g); %.2f s in all\n",

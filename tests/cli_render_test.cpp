@@ -108,6 +108,22 @@ TEST_F(CliRender, TrainFieldAndRenderWithIt) {
                at("near.png").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("field: analytic (the frame is not pure"), std::string::npos) << r.out;
+  // r1 epoch --field writes the field with the epoch, listed in its manifest; r1 train-field into
+  // an epoch directory lists it too, and reading the epoch checks it like every listed file.
+  r = run_cli({"epoch", (dir_->path() / "g.graph").string(), "-q", "--field", "--field-steps", "3", "-o", at("ef").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r1::test::read_file(at("ef") / "manifest.json").find("\"field.nrf\""), std::string::npos);
+  r = run_cli({"render", at("ef").string(), "--distance", "200000", "--size", "48x32", "--field", "neural", "-o", at("ef.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("field: neural"), std::string::npos) << r.out;
+  fs::copy(epoch(), at("copy"), fs::copy_options::recursive);
+  r = run_cli({"train-field", at("copy").string(), "--samples", "4096", "--batch", "1024", "--steps", "3", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r1::test::read_file(at("copy") / "manifest.json").find("\"field.nrf\""), std::string::npos);
+  r1::test::write_file(at("copy") / "field.nrf", r1::test::read_file(at("f1.nrf")));
+  r = run_cli({"export", at("copy").string(), "--tsv", at("copy.tsv").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("field.nrf"), std::string::npos) << r.err;
   std::string bytes = r1::test::read_file(at("f1.nrf"));
   r1::test::write_file(at("cut.nrf"), bytes.substr(0, bytes.size() - 100));
   r = run_cli({"render", epoch().string(), "--size", "48x32", "--field", "neural", "--field-file", at("cut.nrf").string(), "-o",

@@ -1,6 +1,7 @@
 // The epoch directory: canonical arrays (the format library's codecs), manifest, atomic write,
 // validated read, TSV export (R1-EPO-010..020, R1-FMT-010).
 #include "r1/reference/epoch_io.hpp"
+#include "r1/reference/atomic_file.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -312,12 +313,35 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
 }
 
 Status write_epoch(const Epoch& e, const fs::path& dir, const EpochWriteOptions& o) {
-  R1_ASSIGN(const auto files, epoch_files(e));
+  R1_ASSIGN(auto files, epoch_files(e));
+  for (const auto& [name, bytes] : o.extra) {
+    for (const auto& [have, unused] : files)
+      if (have == name) return Status::internal("epoch: extra file " + name + " is one of the stages' files");
+    files.emplace_back(name, bytes);
+  }
   AtomicDirectory out(dir, is_epoch_dir);
   R1_TRY(out.open());
   for (const auto& [name, bytes] : files) R1_TRY(out.write(name, bytes));
   R1_TRY(out.write("manifest.json", epoch_manifest(e, files, o)));
   return out.commit();
+}
+
+Status add_epoch_file(const fs::path& dir, const std::string& name, std::string_view bytes) {
+  if (name.empty() || name == "manifest.json" || name.find('/') != std::string::npos || name.front() == '.')
+    return Status::internal("epoch: cannot add a file named '" + name + "'");
+  const fs::path manifest = dir / "manifest.json";
+  R1_ASSIGN(auto mf, InputFile::open(manifest.string()));
+  json m;
+  try {
+    m = json::parse(mf->text());
+  } catch (const json::exception&) {
+    return Status::input(manifest.string() + ": not JSON");
+  }
+  if (!m.is_object() || m.value("format", "") != kFormat || !m.contains("files") || !m.at("files").is_object())
+    return Status::input(manifest.string() + ": not an r1 epoch manifest");
+  R1_TRY(write_file_atomic(dir / name, bytes));
+  m["files"][name] = {{"bytes", bytes.size()}, {"hemera", file_digest(bytes)}};
+  return write_file_atomic(manifest, m.dump(2) + "\n");
 }
 
 namespace {
