@@ -18,7 +18,7 @@ namespace {
 
 struct ConformCliOptions {
   BackendOption backend;
-  std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000";
+  std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000", tinf_field = "analytic";
   std::string out = "r1_conformance.toml";
   bool list = false;
 };
@@ -57,6 +57,8 @@ Status run_conform(const ConformCliOptions& o) {
   conformance::ConformOptions co;
   R1_ASSIGN(co.checks, conformance::parse_checks(o.checks));
   R1_ASSIGN(co.tinf_sizes, parse_sizes(o.tinf_sizes));
+  if (o.tinf_field != "analytic" && o.tinf_field != "neural") return Status::input("conform: --tinf-field must be analytic or neural");
+  co.tinf_neural = o.tinf_field == "neural";
   if (!o.tinf_epochs.empty()) {
     std::istringstream in(o.tinf_epochs);
     for (std::string w; std::getline(in, w, ',');) co.tinf_epochs.push_back(w);
@@ -111,6 +113,7 @@ void add_conform(CLI::App& app, Runner& selected) {
   cmd->add_option("--fps-epoch", o->fps_epoch, "epoch directory of a 10^6-particle snapshot for P_RENDER_FPS");
   cmd->add_option("--tinf-epochs", o->tinf_epochs, "extra epoch directories (comma-separated) for P_RENDER_TINF");
   cmd->add_option("--tinf-sizes", o->tinf_sizes, "BA graph sizes generated for P_RENDER_TINF (default 1000,10000)");
+  cmd->add_option("--tinf-field", o->tinf_field, "P_RENDER_TINF's far field: analytic (the backend's frames, default) or neural (trained per epoch, reference renderer)");
   cmd->add_option("-o,--output", o->out, "sidecar to write (default r1_conformance.toml)");
   cmd->add_flag("--list", o->list, "list the built backends and exit");
   cmd->callback([o, &selected] { selected = [o] { return run_conform(*o); }; });

@@ -24,7 +24,7 @@ namespace {
 
 constexpr std::uint32_t kPrime1 = 2654435761u, kPrime2 = 805459861u;  // Mueller et al.'s hash
 constexpr std::uint32_t kChunk = 64;  // samples per gradient chunk: the fixed reduction order
-constexpr double kTauOctaves = 4096.0;  // tau_hi / tau_lo: kernels up to 64 times the finest (R1-NRF-001)
+constexpr double kPointMass = 1.0;  // sigma_hi / the scene's extent about its centroid (R1-NRF-001)
 constexpr double kCellsPerSigma = 0.5;  // finest level: a cell per two sigma_min (R1-NRF-002)
 
 // The entry of grid corner (x, y, z) at a level of `res` cells per side (R1-NRF-002): dense when
@@ -52,8 +52,13 @@ struct Query {
   double sigma;  // sqrt(tau) after the clamp, in cube units (size 1)
 };
 
-Query make_query(const NeuralField& f, const Vec3& x, double sigma) {
+Query make_query(const NeuralField& f, const Vec3& x_in, double sigma) {
   Query q;
+  // Kernels wider than the trained range see the scene as one mass at its centroid: the field at
+  // (x, sigma) is the field at (c + (x - c) sigma_hi / sigma, sigma_hi), an exact similarity for a
+  // point mass (R1-NRF-005).
+  Vec3 x = x_in;
+  if (sigma * sigma > f.tau_hi) x = f.centroid + (x_in - f.centroid) * (std::sqrt(f.tau_hi) / sigma);
   const double p[3] = {x.x, x.y, x.z}, l[3] = {f.lo.x, f.lo.y, f.lo.z};
   for (int k = 0; k < 3; ++k) q.u[k] = std::clamp((p[k] - l[k]) / f.size, 0.0, 1.0);
   const double tau = std::clamp(sigma * sigma, f.tau_lo, f.tau_hi);
@@ -208,7 +213,10 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   f.seed = seed;
   // The cube: the positions' box grown by three widest kernels, made cubic (R1-NRF-001).
   f.tau_lo = s.tau0;
-  f.tau_hi = s.tau0 * kTauOctaves;
+  f.centroid = s.centroid;
+  double extent = 0;
+  for (const Vec3& p : s.position) extent = std::max(extent, length(p - s.centroid));
+  f.tau_hi = std::max(16.0 * f.tau_lo, (kPointMass * extent) * (kPointMass * extent));
   Vec3 lo = s.position[0], hi = s.position[0];
   for (const Vec3& p : s.position) {
     lo = Vec3{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
@@ -462,7 +470,8 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
   format::put_f64(out, c.lr_grid);
   format::put_f64(out, c.lr_mlp);
   for (const std::uint32_t r : f.resolution) format::put_u32(out, r);
-  for (const double v : {f.lo.x, f.lo.y, f.lo.z, f.size, f.tau_lo, f.tau_hi, f.kappa, f.loss_first, f.loss_last})
+  for (const double v : {f.lo.x, f.lo.y, f.lo.z, f.size, f.centroid.x, f.centroid.y, f.centroid.z, f.tau_lo, f.tau_hi, f.kappa,
+                         f.loss_first, f.loss_last})
     format::put_f64(out, v);
   format::put_u64(out, f.seed);
   for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
@@ -496,9 +505,11 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
   f.resolution.resize(c.levels);
   for (std::uint32_t& v : f.resolution)
     if (!r.u32(v) || v < 1 || v > 65536) return r.error("bad resolution");
-  for (double* v : {&f.lo.x, &f.lo.y, &f.lo.z, &f.size, &f.tau_lo, &f.tau_hi, &f.kappa, &f.loss_first, &f.loss_last})
+  for (double* v : {&f.lo.x, &f.lo.y, &f.lo.z, &f.size, &f.centroid.x, &f.centroid.y, &f.centroid.z, &f.tau_lo, &f.tau_hi,
+                    &f.kappa, &f.loss_first, &f.loss_last})
     if (!r.f64(*v)) return r.error("truncated");
-  if (!(f.size > 0) || !(f.tau_lo > 0) || !(f.tau_hi >= f.tau_lo) || !std::isfinite(f.size) || !std::isfinite(f.tau_hi))
+  if (!(f.size > 0) || !(f.tau_lo > 0) || !(f.tau_hi >= f.tau_lo) || !std::isfinite(f.size) || !std::isfinite(f.tau_hi) ||
+      !std::isfinite(f.centroid.x) || !std::isfinite(f.centroid.y) || !std::isfinite(f.centroid.z))
     return r.error("bad cube or tau range");
   if (!r.u64(f.seed)) return r.error("truncated");
   const std::uint32_t ni = f.inputs(), nh = c.hidden;

@@ -39,7 +39,8 @@ struct NeuralField {
   std::vector<std::uint32_t> resolution;  // per level: grid cells per cube side
   Vec3 lo;                                // the cube [lo, lo + size]^3 the grid covers
   double size = 1;
-  double tau_lo = 1, tau_hi = 1;          // the trained tau range; queries clamp to it
+  Vec3 centroid;                          // the scene's phi-weighted centroid (R1-NRF-005)
+  double tau_lo = 1, tau_hi = 1;          // the trained tau range (R1-NRF-001, R1-NRF-005)
   double kappa = 0.25;                    // R1-RND-052's density gain
   std::uint64_t seed = 0;                 // R1-NRF-020
   std::vector<float> grid;                // levels x 2^log2_table x 2

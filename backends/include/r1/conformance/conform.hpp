@@ -23,6 +23,9 @@ struct ConformOptions {
   std::vector<std::string> tinf_epochs;  // extra epoch directories for P_RENDER_TINF
   std::vector<std::int64_t> tinf_sizes{1000, 10000};  // BA graphs generated for P_RENDER_TINF
   int tinf_width = 480, tinf_height = 270;
+  // P_RENDER_TINF's candidate far field (R1-CONF-064): false, the backend's frames; true, the
+  // neural field trained for each epoch, drawn by the reference renderer.
+  bool tinf_neural = false;
 };
 
 struct CheckResult {
