@@ -1,5 +1,5 @@
 // The T-infinity neural field: hash-grid encoding, MLP, deterministic training on the analytic far
-// field, and its file (spec/neural.md R1-NRF-001..040).
+// field, and its file (spec/neural.md R1-NRF-001..041).
 #include "neural_field.hpp"
 
 #include <tbb/global_control.h>
