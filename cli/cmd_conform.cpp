@@ -19,6 +19,7 @@ namespace {
 struct ConformCliOptions {
   BackendOption backend;
   std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000", tinf_field = "analytic";
+  std::uint32_t tinf_field_steps = 200;
   std::string out = "r1_conformance.toml";
   bool list = false;
 };
@@ -59,6 +60,7 @@ Status run_conform(const ConformCliOptions& o) {
   R1_ASSIGN(co.tinf_sizes, parse_sizes(o.tinf_sizes));
   if (o.tinf_field != "analytic" && o.tinf_field != "neural") return Status::input("conform: --tinf-field must be analytic or neural");
   co.tinf_neural = o.tinf_field == "neural";
+  co.tinf_field_steps = o.tinf_field_steps;
   if (!o.tinf_epochs.empty()) {
     std::istringstream in(o.tinf_epochs);
     for (std::string w; std::getline(in, w, ',');) co.tinf_epochs.push_back(w);
@@ -113,6 +115,8 @@ void add_conform(CLI::App& app, Runner& selected) {
   cmd->add_option("--fps-epoch", o->fps_epoch, "epoch directory of a 10^6-particle snapshot for P_RENDER_FPS");
   cmd->add_option("--tinf-epochs", o->tinf_epochs, "extra epoch directories (comma-separated) for P_RENDER_TINF");
   cmd->add_option("--tinf-sizes", o->tinf_sizes, "BA graph sizes generated for P_RENDER_TINF (default 1000,10000)");
+  cmd->add_option("--tinf-field-steps", o->tinf_field_steps, "with --tinf-field neural: Adam steps of each training (200)")
+      ->check(CLI::Range(1u, 1000000u));
   cmd->add_option("--tinf-field", o->tinf_field, "P_RENDER_TINF's far field: analytic (the backend's frames, default) or neural (trained per epoch, reference renderer)");
   cmd->add_option("-o,--output", o->out, "sidecar to write (default r1_conformance.toml)");
   cmd->add_flag("--list", o->list, "list the built backends and exit");

@@ -285,7 +285,9 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       if (o.tinf_neural) {
         neural_scene = render::make_scene(e);
         const auto t0 = std::chrono::steady_clock::now();
-        R1_ASSIGN(field, render::train_neural_field(neural_scene, render::NeuralConfig{}, render::neural_seed(e.snapshot_digest)));
+        render::NeuralConfig nc;
+        nc.steps = o.tinf_field_steps;
+        R1_ASSIGN(field, render::train_neural_field(neural_scene, nc, render::neural_seed(e.snapshot_digest)));
         trained = "; neural field trained in " + g3(seconds_since(t0)) + " s";
         neural_scene.neural = &field;
       }

@@ -26,6 +26,7 @@ struct ConformOptions {
   // P_RENDER_TINF's candidate far field (R1-CONF-064): false, the backend's frames; true, the
   // neural field trained for each epoch, drawn by the reference renderer.
   bool tinf_neural = false;
+  std::uint32_t tinf_field_steps = 200;  // its training's Adam steps (R1-NRF-011)
 };
 
 struct CheckResult {
