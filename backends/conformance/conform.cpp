@@ -275,8 +275,6 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       v.labels = false;
       render::RenderOptions ro;
       ro.timings = false;
-      // The least frame time over at least 3 frames and 1 s of frames (at most 100): timer and
-      // scheduler noise only ever add time, and a 20 ms frame needs many tries to show its least.
       // With the neural field (R1-CONF-064) the field is trained for this epoch first (its time
       // reported, not counted) and the reference renderer draws with it.
       render::Scene neural_scene;
@@ -291,6 +289,8 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
         trained = "; neural field trained in " + g3(seconds_since(t0)) + " s";
         neural_scene.neural = &field;
       }
+      // The least frame time over at least 3 frames and 1 s of frames (at most 100): timer and
+      // scheduler noise only ever add time, and a 20 ms frame needs many tries to show its least.
       double s = std::numeric_limits<double>::infinity();
       render::Image got;
       const auto start = std::chrono::steady_clock::now();
