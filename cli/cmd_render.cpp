@@ -6,14 +6,13 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 
 #include "backend_option.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/epoch_io.hpp"
+#include "r1/reference/input_file.hpp"
 #include "render/neural_field.hpp"
 #include "render/renderer.hpp"
 #include "timing.hpp"
@@ -139,10 +138,9 @@ Status run_render(const RenderCliOptions& c) {
   if (use_neural) {
     if (chosen.name != "reference") return Status::input("render: --field neural is drawn by the reference renderer only (got --backend " + chosen.name + ")");
     const std::string path = field_path(c.dir, c.field_file);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return Status::input(path + ": cannot read the neural field (make it with r1 train-field " + c.dir + ")");
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    R1_ASSIGN(neural, render::decode_neural_field(bytes, path, e.snapshot_digest));
+    if (!fs::exists(path)) return Status::input(path + ": no neural field here (make it with r1 train-field " + c.dir + ")");
+    R1_ASSIGN(const auto in, InputFile::open(path));
+    R1_ASSIGN(neural, render::decode_neural_field(in->text(), path, e.snapshot_digest));
     scene.neural = &neural;
   }
 

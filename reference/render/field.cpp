@@ -332,6 +332,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     }
     const Vec3 x = ray.at(t);
     if (stats) ++stats->samples;
+    FieldValue v;
     if (neural) {
       // The neural field (R1-NRF-031): evaluated where some candidate is within reach, the same
       // samples the analytic field would sum kernels at.
@@ -339,27 +340,23 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
         return within_reach(x, c->node.centroid, c->node.extent, reach);
       });
       if (!near) continue;
-      const FieldValue v = s.neural->evaluate(x, sigma);
+      v = s.neural->evaluate(x, sigma);
       if (stats) ++stats->neural;
-      if (!(v.weight > 0)) continue;
-      const double alpha = 1.0 - std::exp(-v.density * delta);
-      out.push_back({t, alpha, v.color, v.flow});
-      transmittance *= 1.0 - alpha;
-      continue;
-    }
-    Accumulator acc;
-    for (const Candidate* cp : active) {
-      const Candidate& c = *cp;
-      if (!within_reach(x, c.node.centroid, c.node.extent, reach)) continue;
-      if (c.aggregate) {
-        acc.add(c.node.weight, c.node.centroid, c.node.color, x, inv);
-        continue;
+    } else {
+      Accumulator acc;
+      for (const Candidate* cp : active) {
+        const Candidate& c = *cp;
+        if (!within_reach(x, c.node.centroid, c.node.extent, reach)) continue;
+        if (c.aggregate) {
+          acc.add(c.node.weight, c.node.centroid, c.node.color, x, inv);
+          continue;
+        }
+        add_members(ff, c.id, x, inv, acc);
       }
-      add_members(ff, c.id, x, inv, acc);
+      if (stats) stats->evaluations += acc.kernels;
+      v = acc.value(p.kappa, sigma);
     }
-    if (stats) stats->evaluations += acc.kernels;
-    if (acc.w <= 0) continue;
-    const FieldValue v = acc.value(p.kappa, sigma);
+    if (!(v.weight > 0)) continue;  // nothing of the field reaches this sample
     const double alpha = 1.0 - std::exp(-v.density * delta);
     out.push_back({t, alpha, v.color, v.flow});
     transmittance *= 1.0 - alpha;

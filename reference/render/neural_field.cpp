@@ -92,8 +92,8 @@ void encode(const NeuralField& f, const Query& q, Encoding& e, float* features) 
       a += static_cast<float>(w) * f.grid[idx];
       b += static_cast<float>(w) * f.grid[idx + 1];
     }
-    // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, 2 h / sigma) for cells of
-    // side h, so a wide kernel reads only the coarse levels that can hold its smooth field.
+    // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, (2 h / sigma)^2) for cells
+    // of side h, so a wide kernel reads only the coarse levels that can hold its smooth field.
     const double fade = 2.0 / (res * q.sigma);
     const float mask = static_cast<float>(std::min(1.0, fade * fade));
     e.mask[l] = mask;
@@ -143,6 +143,11 @@ double gaussian(std::uint64_t seed, std::uint64_t item, std::uint64_t dim) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
 }
 
+// The architecture a field may have (training refuses others, reading rejects them).
+bool architecture_in_range(const NeuralConfig& c) {
+  return c.levels >= 1 && c.levels <= 32 && c.log2_table >= 4 && c.log2_table <= 24 && c.hidden >= 1 && c.hidden <= 1024;
+}
+
 template <class Body>
 void parallel_chunks(std::uint32_t count, Body&& body) {
   tbb::parallel_for(std::uint32_t{0}, count, [&](std::uint32_t c) { body(c); });
@@ -186,10 +191,7 @@ FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
   std::vector<std::uint8_t> m(snapshot_digest.begin(), snapshot_digest.end());
   for (const char c : std::string_view("nrf")) m.push_back(static_cast<std::uint8_t>(c));
-  const hemera::Digest d = hemera::hash(m);
-  std::uint64_t s = 0;
-  for (int b = 0; b < 8; ++b) s |= static_cast<std::uint64_t>(d[static_cast<std::size_t>(b)]) << (8 * b);
-  return s;
+  return format::load_u64(hemera::hash(m).data());  // the digest's first 8 bytes, little-endian
 }
 
 FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
@@ -202,8 +204,7 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
 Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
                                        const ProgressFn& progress) {
   if (s.n == 0) return Status::input("train-field: the epoch has no particles");
-  if (c.levels < 1 || c.levels > 32 || c.log2_table < 4 || c.log2_table > 24 || c.hidden < 1 || c.hidden > 1024 ||
-      c.samples < 1 || c.batch < 1 || c.base_resolution < 1)
+  if (!architecture_in_range(c) || c.samples < 1 || c.batch < 1 || c.base_resolution < 1)
     return Status::input("train-field: configuration out of range");
   std::unique_ptr<tbb::global_control> limit;
   if (c.threads > 0)
@@ -215,18 +216,18 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   f.tau_lo = s.tau0;
   f.centroid = s.centroid;
   double extent = 0;
-  for (const Vec3& p : s.position) extent = std::max(extent, length(p - s.centroid));
-  f.tau_hi = std::max(16.0 * f.tau_lo, (kPointMass * extent) * (kPointMass * extent));
   Vec3 lo = s.position[0], hi = s.position[0];
   for (const Vec3& p : s.position) {
+    extent = std::max(extent, length(p - s.centroid));
     lo = Vec3{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = Vec3{std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
+  f.tau_hi = std::max(16.0 * f.tau_lo, (kPointMass * extent) * (kPointMass * extent));
   const double margin = 3 * std::sqrt(f.tau_hi);
   f.size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 2 * margin;
   const Vec3 mid = (lo + hi) * 0.5;
   f.lo = mid - Vec3{f.size / 2, f.size / 2, f.size / 2};
-  // Resolutions: geometric from base_resolution to the finest kernel's (4 cells per sqrt(tau_lo)).
+  // Resolutions: geometric from base_resolution to the finest kernel's (a cell per 2 sqrt(tau_lo)).
   const double finest = std::clamp(kCellsPerSigma * f.size / std::sqrt(f.tau_lo), static_cast<double>(c.base_resolution), 4096.0);
   f.resolution.resize(c.levels);
   for (std::uint32_t l = 0; l < c.levels; ++l) {
@@ -343,6 +344,11 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   };
   std::vector<ChunkGrad> cg(chunks);
   for (ChunkGrad& g : cg) g.mlp.resize(n_mlp);
+  // The MLP's parameters in gradient order (w1, b1, w2, b2, w3, b3, as ChunkGrad::mlp holds them).
+  std::vector<float*> params;
+  params.reserve(n_mlp);
+  for (std::vector<float>* v : {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
+    for (float& p : *v) params.push_back(&p);
   for (std::uint32_t step = 1; step <= c.steps; ++step) {
     const std::uint64_t first = static_cast<std::uint64_t>(step - 1) * c.batch;
     const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
@@ -414,10 +420,6 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     adam_mlp.begin_step(step, c.lr_mlp);
     adam_grid.begin_step(step, c.lr_grid);
     // The MLP: every parameter's gradient summed over the chunks in chunk order, then its step.
-    std::vector<float*> params;
-    params.reserve(n_mlp);
-    for (std::vector<float>* v : {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
-      for (float& p : *v) params.push_back(&p);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_mlp, 512), [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         float gsum = 0.0f;
@@ -500,8 +502,7 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
   for (std::uint32_t* v : {&c.levels, &c.log2_table, &c.base_resolution, &c.hidden, &c.samples, &c.batch, &c.steps})
     if (!r.u32(*v)) return r.error("truncated");
   if (!r.f64(c.lr_grid) || !r.f64(c.lr_mlp)) return r.error("truncated");
-  if (c.levels < 1 || c.levels > 32 || c.log2_table < 4 || c.log2_table > 24 || c.hidden < 1 || c.hidden > 1024)
-    return r.error("architecture out of range");
+  if (!architecture_in_range(c)) return r.error("architecture out of range");
   f.resolution.resize(c.levels);
   for (std::uint32_t& v : f.resolution)
     if (!r.u32(v) || v < 1 || v > 65536) return r.error("bad resolution");
@@ -522,9 +523,9 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
     if (r.left() < sizes[k] * 4) return r.error("truncated");
     dst[k]->resize(sizes[k]);
     for (float& x : *dst[k]) {
-      const std::string_view rest = r.rest();
-      x = std::bit_cast<float>(format::load_u32(rest.data()));
-      r.skip(4);
+      std::uint32_t bits = 0;
+      r.u32(bits);  // the length was checked above
+      x = std::bit_cast<float>(bits);
       if (!std::isfinite(x)) return r.error("non-finite parameter");
     }
   }
