@@ -7,7 +7,7 @@ CMAKE_FLAGS ?=
 R1 := build/cli/r1
 OUT ?= out
 
-.PHONY: all deps configure build run layering test test-fast test-san test-asan san-build fuzz-build fuzz-smoke install-test clean bench golden conform
+.PHONY: all deps configure build run view layering test test-fast test-san test-asan san-build fuzz-build fuzz-smoke install-test clean bench golden conform
 
 all: build
 
@@ -39,6 +39,14 @@ run: configure
 	@$(R1) render $(OUT)/crystal.epoch --distance 12000 --size 960x540 -o $(OUT)/views/crystal-far.png
 	@echo "views              $(OUT)/views/ (crystal-000..003.png: orbit; crystal-far.png: the T-infinity far field)"
 
+# The web viewer on make run's crystal epoch (made first if missing): open the printed URL in a
+# browser with WebGL2. VIEW_FLAGS passes options, e.g. VIEW_FLAGS="--port 9000".
+view: configure
+	@cmake --build build -j $(JOBS) --target r1_cli
+	@if [ ! -f $(OUT)/crystal.epoch/manifest.json ]; then mkdir -p $(OUT) && $(R1) gen crystal -o $(OUT)/crystal.graph && \
+	  $(R1) epoch $(OUT)/crystal.graph --overlay crystal-v5 -o $(OUT)/crystal.epoch; fi
+	@$(R1) view $(OUT)/crystal.epoch $(VIEW_FLAGS)
+
 # The include direction first (shared/DESIGN.md; spec/backends.md R1-BKD-015): a bad include
 # fails in a second, before any build (after deps, which brings python3 to a bare machine).
 layering: deps
@@ -49,7 +57,7 @@ test:
 	@scripts/phase.sh deps scripts/install-deps.sh
 	@scripts/phase.sh layering /usr/bin/python3 scripts/check-layering.py
 	@scripts/phase.sh build $(MAKE) --no-print-directory build
-	@scripts/phase.sh tests env R1_REQUIRE_VULKAN=1 ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
+	@scripts/phase.sh tests env R1_REQUIRE_VULKAN=1 R1_REQUIRE_BROWSER=1 ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
 	@scripts/phase.sh san-build $(MAKE) --no-print-directory san-build
 	@scripts/phase.sh san-tests $(MAKE) --no-print-directory san-tests
 	@scripts/phase.sh fuzz-smoke scripts/fuzz-smoke.sh $(SAN) $(FUZZ_SECONDS)
@@ -74,7 +82,7 @@ san-build: deps
 
 san-tests:
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  ctest --test-dir $(SAN) --output-on-failure -j $(JOBS) -LE "slow|install" --timeout 1800
+	  ctest --test-dir $(SAN) --output-on-failure -j $(JOBS) -LE "slow|install|browser" --timeout 1800
 
 test-san: san-build
 	@$(MAKE) --no-print-directory san-tests

@@ -79,7 +79,9 @@ Status run_diff(const DiffCliOptions& o) {
   if (wa != wb || ha != hb) return report_size_mismatch(o, wa, ha, wb, hb);
 
   std::vector<float> heat;
-  const render::DiffStats st = render::diff_srgb8(a, b, wa, ha, o.diff, o.heatmap.empty() ? nullptr : &heat);
+  const render::DiffStats st = render::diff_srgb8(a, b, wa, ha, o.diff, &heat);
+  // Over the pixels either image covers (not the default background), R1-RND-117.
+  const render::CoveredMean covered = render::covered_mean_2000(a, b, heat, render::View{}.background);
   // The heatmap is written before anything is printed: a failed write is one error line and
   // nothing else (R1-ERR-001, R1-ERR-003).
   if (!o.heatmap.empty()) R1_TRY(render::write_heatmap(heat, wa, ha, heatmap_scale(o.diff.threshold), o.heatmap));
@@ -101,6 +103,8 @@ Status run_diff(const DiffCliOptions& o) {
                               {"p99_76", st.p99_76},
                               {"max_76", st.max_76},
                               {"over", st.over},
+                              {"covered", covered.covered},
+                              {"covered_mean_2000", covered.mean_2000},
                               {"over_percent", percent(st.over, st.pixels)},
                               {"threshold", o.diff.threshold},
                               {"fail_mean", o.diff.fail_mean},

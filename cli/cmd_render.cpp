@@ -7,12 +7,15 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <nlohmann/json.hpp>
+
 #include "backend_option.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/input_file.hpp"
+#include "render/navigation.hpp"
 #include "render/neural_field.hpp"
 #include "render/renderer.hpp"
 #include "timing.hpp"
@@ -30,6 +33,8 @@ struct RenderCliOptions {
   double fov = 0, time = 0, distance = 0;
   bool no_edges = false, no_labels = false, no_field = false, quiet = false;
   std::string field = "analytic", field_file;
+  std::string path, write_path;  // R1-VIEW-050: a camera path (warp:QUERY, follow:SECONDS) and its poses
+  double fps = 30;
   BackendOption backend;
 };
 
@@ -113,9 +118,63 @@ void print_stats(const fs::path& path, const render::View& v, const render::Fram
   }
 }
 
+// R1-VIEW-050: the views of a camera path from `start`, one every 1/fps seconds and one at its end:
+// warp:QUERY (R1-VIEW-021, 0.5 s) or follow:SECONDS (R1-VIEW-032 with no user velocity).
+Result<std::vector<render::View>> path_views(const RenderCliOptions& c, const Epoch& e, const render::Scene& scene,
+                                             const render::View& start) {
+  if (!(c.fps > 0 && c.fps <= 1000)) return Status::input("render: --fps must lie in (0, 1000]");
+  const auto colon = c.path.find(':');
+  const std::string kind = c.path.substr(0, colon), arg = colon == std::string::npos ? "" : c.path.substr(colon + 1);
+  std::vector<render::View> views;
+  const double dt = 1.0 / c.fps;
+  if (kind == "warp") {
+    R1_ASSIGN(const std::uint32_t p, render::find_particle(e.ids, e.titles, scene.phi, arg));
+    const render::Camera to = render::warp_end(start.camera, scene, p);
+    const auto steps = static_cast<int>(std::ceil(render::kWarpSeconds * c.fps - 1e-9));
+    for (int k = 0; k <= steps; ++k) {
+      render::View v = start;
+      v.camera = render::warp_at(start.camera, to, std::min(k * dt, render::kWarpSeconds));
+      views.push_back(v);
+    }
+    return views;
+  }
+  if (kind == "follow") {
+    double seconds = 0;
+    const auto r = std::from_chars(arg.data(), arg.data() + arg.size(), seconds);
+    if (r.ec != std::errc() || r.ptr != arg.data() + arg.size() || !(seconds > 0 && seconds <= 600))
+      return Status::input("render: --path follow:SECONDS needs 0 < SECONDS <= 600");
+    const render::EdgeIndex index = render::index_edges(scene);
+    const auto steps = static_cast<int>(std::ceil(seconds * c.fps - 1e-9));
+    render::View v = start;
+    views.push_back(v);
+    for (int k = 0; k < steps; ++k) {
+      v.camera = render::follow_flow_step(scene, index, v.camera, {0, 0, 0}, dt);
+      views.push_back(v);
+    }
+    return views;
+  }
+  return Status::input("render: --path must be warp:QUERY or follow:SECONDS (got '" + c.path + "')");
+}
+
+// The poses of a path as JSON: [{"t": s, "position": [x, y, z], "orientation": [w, x, y, z], "fov": deg}, ...].
+std::string path_json(const std::vector<render::View>& views, double fps) {
+  nlohmann::json a = nlohmann::json::array();
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const auto& cam = views[k].camera;
+    a.push_back({{"t", static_cast<double>(k) / fps},
+                 {"position", {cam.position.x, cam.position.y, cam.position.z}},
+                 {"orientation", {cam.orientation.w, cam.orientation.x, cam.orientation.y, cam.orientation.z}},
+                 {"fov", cam.fov_deg}});
+  }
+  return a.dump(1) + "\n";
+}
+
 Status run_render(const RenderCliOptions& c) {
-  if (c.out.empty()) return Status::input("render: say where to write the image (-o OUT.png or OUT.exr)");
-  R1_TRY(render::check_image_extension(c.out));
+  const bool path_only = !c.path.empty() && !c.write_path.empty() && c.out.empty();
+  if (!c.write_path.empty() && c.path.empty()) return Status::input("render: --write-path goes with --path");
+  if (c.out.empty() && !path_only) return Status::input("render: say where to write the image (-o OUT.png or OUT.exr)");
+  if (!path_only) R1_TRY(render::check_image_extension(c.out));
+  if (!c.path.empty() && c.orbit > 0) return Status::input("render: --path starts from one view (--view or --eye/--target), not --orbit");
   const int forms = (c.view_file.empty() ? 0 : 1) + (c.orbit > 0 ? 1 : 0) + (c.eye.empty() && c.target.empty() ? 0 : 1);
   if (forms > 1) return Status::input("render: give one of --view, --orbit and --eye/--target");
   if (c.orbit < 0 || c.orbit > 360) return Status::input("render: --orbit K needs 1 <= K <= 360");
@@ -169,8 +228,19 @@ Status run_render(const RenderCliOptions& c) {
     // R1-RND-007: the default is the first orbit view.
     views = render::orbit_views(base, scene.centroid, distance, std::max(c.orbit, 1));
   }
+  if (!c.path.empty()) {
+    R1_TRY(render::validate_view(views.front(), "render"));
+    R1_ASSIGN(views, path_views(c, e, scene, views.front()));
+  }
   for (auto& v : views) R1_TRY(render::validate_view(v, "render"));
   if (!c.write_view.empty()) R1_TRY(write_file_atomic(c.write_view, render::view_toml(views.front())));
+  if (!c.write_path.empty()) {
+    R1_TRY(write_file_atomic(c.write_path, path_json(views, c.fps)));
+    if (path_only) {
+      if (!c.quiet) std::printf("%s: %zu poses of %s\n", c.write_path.c_str(), views.size(), c.path.c_str());
+      return Status::ok();
+    }
+  }
 
   // Render every view first, then write: a failed frame leaves no images behind (R1-ERR-003).
   std::vector<render::Image> images;
@@ -223,6 +293,9 @@ void add_render(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-field", c->no_field, "no T-infinity field (sub-pixel particles vanish)");
   cmd->add_option("--field", c->field, "T-infinity field: analytic (the oracle, default) or neural (trained by r1 train-field)");
   cmd->add_option("--field-file", c->field_file, "the trained field (default: EPOCH_DIR/field.nrf)");
+  cmd->add_option("--path", c->path, "a camera path from the view: warp:QUERY (a title or hex id prefix) or follow:SECONDS; frames OUT-000 ...");
+  cmd->add_option("--fps", c->fps, "frames per second along --path (30)");
+  cmd->add_option("--write-path", c->write_path, "write the path's poses as JSON (without -o: only that)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
   c->backend.add_to(*cmd);
   cmd->callback([c, &selected] { selected = [c] { return run_render(*c); }; });

@@ -31,5 +31,6 @@ void add_golden(CLI::App& app, Runner& selected);
 void add_conform(CLI::App& app, Runner& selected);
 void add_diff(CLI::App& app, Runner& selected);
 void add_bench(CLI::App& app, Runner& selected);
+void add_view(CLI::App& app, Runner& selected);
 
 }  // namespace r1::cli

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   r1::cli::add_conform(app, selected);
   r1::cli::add_diff(app, selected);
   r1::cli::add_bench(app, selected);
+  r1::cli::add_view(app, selected);
 
   try {
     app.parse(argc, argv);

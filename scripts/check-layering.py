@@ -49,6 +49,7 @@ LAYER_OF = [
     ("backends/conformance/", "driver"),
     ("backends/include/r1/conformance/", "driver"),
     ("cli/", "consumer"),
+    ("viewer/", "consumer"),  # the web viewer's server and page: reads epochs through the reference
     ("tests/", "consumer"),
     ("fuzz/", "consumer"),
     ("bench/", "consumer"),

@@ -10,6 +10,8 @@ set -euo pipefail
 #   images: OpenImageIO (+ the tools and OpenCV core its CMake config asks for), OpenColorIO,
 #     DejaVu fonts for the T1 labels OpenImageIO draws
 #   tests/bench: GoogleTest/GoogleMock, RapidCheck, Google Benchmark, SciPy for peer comparisons
+#   viewer: cpp-httplib (r1 view's server); Chromium for the page's browser tests (Node.js and
+#     playwright-core come after the packages, below)
 #   vulkan: the loader and headers, shaderc (GLSL to SPIR-V at run time, the 13.1 trait's
 #     shader_compile), Mesa's lavapipe (a Vulkan device on the CPU, so CI runs the Vulkan tests)
 PACKAGES=(
@@ -21,6 +23,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
   python3 python3-numpy python3-scipy
   libvulkan-dev libshaderc-dev mesa-vulkan-drivers
+  libcpp-httplib-dev chromium
 )
 
 missing=()
@@ -30,17 +33,27 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 
+# The browser tests' driver: Node.js (Debian's, unless one is installed) and playwright-core,
+# pinned by viewer/tests/package-lock.json, from the npm registry into viewer/tests/node_modules.
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+if ! command -v node >/dev/null 2>&1; then missing+=(nodejs npm); fi
+need_npm=0
+[ -d "$ROOT/viewer/tests/node_modules/playwright-core" ] || need_npm=1
+
 if [ "${1:-}" = "--check" ]; then
+  [ $need_npm = 1 ] && missing+=("npm:playwright-core")
   if [ ${#missing[@]} -eq 0 ]; then echo "all dependencies present"; else echo "missing: ${missing[*]}"; fi
   exit 0
 fi
-if [ ${#missing[@]} -eq 0 ]; then
-  exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "r1: installing missing packages: ${missing[*]}" >&2
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
-
-echo "r1: installing missing packages: ${missing[*]}" >&2
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if [ $need_npm = 1 ]; then
+  echo "r1: installing playwright-core (viewer/tests, the browser tests' driver)" >&2
+  npm ci --prefix "$ROOT/viewer/tests" --no-audit --no-fund --loglevel=error >&2
+fi

@@ -57,28 +57,15 @@ double pure_tinf_distance(const render::Scene& s, const render::View& v) {
   return 2.0 * r * focal / (v.tiers.t3 - v.tiers.band) * 1.05 + extent;
 }
 
-// The mean CIEDE2000 of two display sRGB frames of `v` over the pixels either frame covers (bytes
-// other than the background's), R1-CONF-063. A far view covers a few percent of the frame, so the
-// mean over every pixel would let a frame that draws nothing pass; over the covered pixels it
-// cannot. A reference frame that covers nothing makes the comparison empty: an internal error.
+// The mean CIEDE2000 of two display sRGB frames of `v` over the pixels either frame covers
+// (R1-CONF-063). A reference frame that covers nothing makes the comparison empty: an internal error.
 Result<double> covered_mean_2000(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& want,
                                  const render::View& v) {
   std::vector<float> heat;
   render::diff_srgb8(a, want, v.width, v.height, {}, &heat);
-  auto background_at = [&](const std::vector<std::uint8_t>& img, std::size_t p) {
-    return img[3 * p] == v.background[0] && img[3 * p + 1] == v.background[1] && img[3 * p + 2] == v.background[2];
-  };
-  double sum = 0;
-  std::size_t covered = 0, want_covered = 0;
-  for (std::size_t p = 0; p < heat.size(); ++p) {
-    const bool w = !background_at(want, p);
-    want_covered += w ? 1 : 0;
-    if (!w && background_at(a, p)) continue;
-    ++covered;
-    sum += static_cast<double>(heat[p]);
-  }
-  if (want_covered == 0) return Status::internal("conform: the reference's T-infinity frame draws nothing");
-  return sum / static_cast<double>(covered);
+  const render::CoveredMean m = render::covered_mean_2000(a, want, heat, v.background);
+  if (m.b_covered == 0) return Status::internal("conform: the reference's T-infinity frame draws nothing");
+  return m.mean_2000;
 }
 
 Result<Epoch> generated_epoch(backends::Backend& b, std::int64_t n) {

@@ -260,4 +260,22 @@ Status write_heatmap(std::span<const float> heat, int width, int height, double 
   return file.commit();
 }
 
+CoveredMean covered_mean_2000(std::span<const std::uint8_t> a, std::span<const std::uint8_t> b, std::span<const float> heat,
+                              const std::array<std::uint8_t, 3>& background) {
+  const auto background_at = [&](std::span<const std::uint8_t> img, std::size_t p) {
+    return img[3 * p] == background[0] && img[3 * p + 1] == background[1] && img[3 * p + 2] == background[2];
+  };
+  CoveredMean m;
+  double sum = 0;
+  for (std::size_t p = 0; p < heat.size(); ++p) {
+    const bool in_b = !background_at(b, p);
+    m.b_covered += in_b ? 1 : 0;
+    if (!in_b && background_at(a, p)) continue;
+    ++m.covered;
+    sum += static_cast<double>(heat[p]);
+  }
+  m.mean_2000 = m.covered > 0 ? sum / static_cast<double>(m.covered) : 0.0;
+  return m;
+}
+
 }  // namespace r1::render

@@ -60,6 +60,17 @@ double percentile_nearest_rank(std::span<double> values, int percent);
 DiffStats diff_srgb8(std::span<const std::uint8_t> a, std::span<const std::uint8_t> b, int width, int height,
                      const DiffOptions& options, std::vector<float>* heat);
 
+// The mean CIEDE2000 over the pixels either image covers (bytes other than `background`), from
+// diff_srgb8's per-pixel `heat`: a far view covers a few percent of the frame, so a mean over every
+// pixel would let a frame that draws nothing pass; over the covered pixels it cannot (R1-CONF-063).
+// `b_covered` counts the second image's own covered pixels (0: nothing to compare against).
+struct CoveredMean {
+  double mean_2000 = 0;
+  std::uint64_t covered = 0, b_covered = 0;
+};
+CoveredMean covered_mean_2000(std::span<const std::uint8_t> a, std::span<const std::uint8_t> b, std::span<const float> heat,
+                              const std::array<std::uint8_t, 3>& background);
+
 // Reads an image as 8-bit display sRGB RGB (3 bytes a pixel, row-major), setting width and height:
 //  - PNG, 8 bits a channel, RGB or RGBA. RGB is taken as it is. RGBA is straight (unassociated)
 //    alpha as PNG defines it; it is composited over `background` in linear light (IEC 61966-2-1

@@ -96,10 +96,14 @@ Scene make_scene(const Epoch& e) {
   return s;
 }
 
-double fit_distance(const Scene& s, double fov_deg) {
-  double fit = 1;
+double scene_extent(const Scene& s) {
+  double fit = 0;
   for (std::uint32_t p = 0; p < s.n; ++p) fit = std::max(fit, length(s.position[p] - s.centroid) + s.radius[p]);
-  return 1.05 * fit / std::sin(fov_deg * kPi / 360.0);
+  return fit;
+}
+
+double fit_distance(const Scene& s, double fov_deg) {
+  return 1.05 * std::max(1.0, scene_extent(s)) / std::sin(fov_deg * kPi / 360.0);
 }
 
 }  // namespace r1::render

@@ -63,6 +63,10 @@ void for_each_member(const Scene& s, int level, std::uint32_t id, Fn&& fn) {
   for (std::uint32_t c : children) for_each_member(s, level - 1, c, fn);
 }
 
+// The largest |X'(p) - centroid| + r(p): the radius of the ball about the focus centroid that holds
+// every particle.
+double scene_extent(const Scene& s);
+
 // R1-RND-007: the camera distance from the focus centroid at which every particle's bounding
 // sphere fits the vertical field of view `fov_deg`, with 5% margin (the default orbit radius).
 double fit_distance(const Scene& s, double fov_deg);
