@@ -71,7 +71,8 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
   }
   // Per hierarchy node, level by level: the render scene's aggregates (R1-RND-013) and its parent,
   // for the page's edge bundles (R1-RND-064..066): centroid x y z, extent, max radius,
-  // area-equivalent radius, linear colour r g b, parent id (-1 at the top level), box lo x y z, hi x y z.
+  // area-equivalent radius, linear colour r g b, parent id (-1 at the top level), box lo x y z, hi x y z,
+  // member phi, member count.
   for (int l = 0; l < kLevels; ++l) {
     const auto level = static_cast<std::size_t>(l);
     for (std::size_t id = 0; id < s.nodes[level].size(); ++id) {
@@ -79,7 +80,7 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
       const std::uint32_t parent = s.hierarchy->levels[level][id].parent;
       for (const double v : {d.centroid.x, d.centroid.y, d.centroid.z, d.extent, d.max_radius, d.radius, d.color.x, d.color.y,
                              d.color.z, parent == 0xFFFFFFFFu ? -1.0 : static_cast<double>(parent), d.lo.x, d.lo.y, d.lo.z,
-                             d.hi.x, d.hi.y, d.hi.z})
+                             d.hi.x, d.hi.y, d.hi.z, d.phi, static_cast<double>(d.count)})
         put(nodes, v);
     }
   }

@@ -191,6 +191,7 @@
     S.levelOffset = [0];
     for (const c of d.meta.hierarchy_levels) S.levelOffset.push(S.levelOffset[S.levelOffset.length - 1] + c);
     S.incident = indexEdges();
+    S.children = indexChildren();
     S.transition = from ? { from, start: performance.now(), seconds: 1.0 } : null;
     S.shown = S.pos;
     G.tubeKey = null;
@@ -219,33 +220,92 @@
     planes.push([f.forward, -dot(f.forward, c.position) - NEAR]);
     return planes;
   }
-  // Per particle: screen diameter when visible (R1-RND-020, 022), else 0; with tier counts and
-  // each particle's depth for the splat order.
+  // Children of every hierarchy node (nodes of the level below; particles for level 0), from the
+  // parents and clusters.u32: offsets into one list per level.
+  function indexChildren() {
+    const out = [];
+    for (let l = 0; l < 4; ++l) {
+      const count = S.levelOffset[l + 1] - S.levelOffset[l];
+      const offset = new Uint32Array(count + 1);
+      const members = l === 0 ? S.n : S.levelOffset[l] - S.levelOffset[l - 1];
+      const parentOfMember = (k) => l === 0 ? S.clusters[4 * k] : S.nodes[(S.levelOffset[l - 1] + k) * NODE_FLOATS + 9];
+      for (let k = 0; k < members; ++k) ++offset[parentOfMember(k) + 1];
+      for (let i = 0; i < count; ++i) offset[i + 1] += offset[i];
+      const list = new Uint32Array(offset[count]);
+      const fill = offset.slice(0, count);
+      for (let k = 0; k < members; ++k) list[fill[parentOfMember(k)]++] = k;
+      out.push({ offset, list });
+    }
+    return out;
+  }
+  // The particles and far-field node kernels of a frame (R1-RND-020..025, 054): the hierarchy is
+  // walked from the top; a node wholly inside the frustum whose members all project at or below
+  // t3 - band (so all are T-infinity with weight 1) and whose extent is at most theta = 0.25 kernel
+  // widths (or half a pixel) is drawn as one kernel at its centroid with its members' summed focus,
+  // as the reference's field evaluates it; otherwise level-0 nodes list their visible particles. Each
+  // drawn item: index (particles) or -1 - node (kernels), its depth; with per-particle sizes (0 when
+  // not listed) and tier counts.
   function classify(c, f) {
-    const pl = frustum(c, f), t = S.meta.tiers;
-    const size = new Float64Array(S.n), depth = new Float64Array(S.n);
+    const pl = frustum(c, f), t = S.meta.tiers, nd = S.nodes;
+    const size = new Float64Array(S.n);
+    const items = [], depths = [];
     const counts = [0, 0, 0, 0, 0];
     let visible = 0;
+    const tau = tauCam(c), tfar = tFar(c, f);
     const pos = S.shown;
-    for (let p = 0; p < S.n; ++p) {
-      const x = pos[3 * p], y = pos[3 * p + 1], z = pos[3 * p + 2], r = S.radius[p];
-      depth[p] = (x - c.position[0]) * f.forward[0] + (y - c.position[1]) * f.forward[1] + (z - c.position[2]) * f.forward[2];
-      let inside = true;
-      for (let k = 0; k < 5 && inside; ++k) {
+    const sphereTest = (x, y, z, r) => {   // -1 outside, 1 wholly inside, 0 across
+      let inside = 1;
+      for (let k = 0; k < 5; ++k) {
         const [nn, off] = pl[k];
-        if (nn[0] * x + nn[1] * y + nn[2] * z + off < -r) inside = false;
+        const dist = nn[0] * x + nn[1] * y + nn[2] * z + off;
+        if (dist < -r) return -1;
+        if (dist < r) inside = 0;
       }
-      if (!inside) continue;
-      ++visible;
-      const s = depth[p] > r + NEAR ? 2 * r * f.focal / depth[p] : 1e300;
-      size[p] = s;
-      ++counts[s > t.t0 ? 0 : s > t.t1 ? 1 : s > t.t2 ? 2 : s > t.t3 ? 3 : 4];
+      return inside;
+    };
+    const stack = [];
+    for (let id = 0; id < S.levelOffset[4] - S.levelOffset[3]; ++id) stack.push([3, id]);
+    while (stack.length) {
+      const [l, id] = stack.pop();
+      const key = S.levelOffset[l] + id, o = key * NODE_FLOATS;
+      const x = nd[o], y = nd[o + 1], z = nd[o + 2], extent = nd[o + 3], maxr = nd[o + 4];
+      const test = sphereTest(x, y, z, extent + maxr);
+      if (test < 0) continue;
+      const depth = (x - c.position[0]) * f.forward[0] + (y - c.position[1]) * f.forward[1] + (z - c.position[2]) * f.forward[2];
+      const nearest = depth - extent - maxr;
+      if (test > 0 && nearest > NEAR && 2 * maxr * f.focal / nearest <= t.t3 - t.band) {
+        const sigma = Math.max(Math.sqrt(tau * Math.max(depth - extent, 0) / tfar), 0.5 * Math.max(depth - extent, 0) / f.focal);
+        // theta sigma as the reference's field aggregates, or half a pixel: members that close
+        // to their centroid fall in one pixel (the viewer's level of detail, R1-VIEW-043).
+        if (extent <= Math.max(0.25 * sigma, 0.5 * (depth - extent) / f.focal)) {
+          items.push(-1 - key); depths.push(depth);
+          const members = nd[o + 17];
+          counts[4] += members; visible += members;
+          continue;
+        }
+      }
+      const ch = S.children[l];
+      if (l > 0) {
+        for (let k = ch.offset[id + 1]; k-- > ch.offset[id];) stack.push([l - 1, ch.list[k]]);
+        continue;
+      }
+      for (let k = ch.offset[id]; k < ch.offset[id + 1]; ++k) {
+        const p = ch.list[k];
+        const px = pos[3 * p], py = pos[3 * p + 1], pz = pos[3 * p + 2], r = S.radius[p];
+        if (sphereTest(px, py, pz, r) < 0) continue;
+        const d = (px - c.position[0]) * f.forward[0] + (py - c.position[1]) * f.forward[1] + (pz - c.position[2]) * f.forward[2];
+        const s = d > r + NEAR ? 2 * r * f.focal / d : 1e300;
+        size[p] = s;
+        ++visible;
+        ++counts[s > t.t0 ? 0 : s > t.t1 ? 1 : s > t.t2 ? 2 : s > t.t3 ? 3 : 4];
+        items.push(p); depths.push(d);
+      }
     }
-    return { size, depth, counts, visible };
+    return { size, items, depths, counts, visible };
   }
   // Hierarchy endpoints as integers: particle p is p, node (level, id) is n + levelOffset[level] + id,
   // so their order is R1-RND-064's (level, id) with particles as level -1.
-  const NODE_FLOATS = 16;
+  const NODE_FLOATS = 18;
   const nodeAt = (key) => (key - S.n) * NODE_FLOATS;
   function nodeLevel(key) { let l = 0; while (key - S.n >= S.levelOffset[l + 1]) ++l; return l; }
   function endpointOf(p, s, c, f) {
@@ -602,20 +662,33 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
   // translucent passes composite in depth order (R1-RND-043; ties by the lower index).
   const SORT_LIMIT = 300000;
   function uploadInstances(cls) {
-    const order = new Uint32Array(S.n);
-    for (let p = 0; p < S.n; ++p) order[p] = p;
-    if (S.n <= SORT_LIMIT) order.sort((a, b) => cls.depth[b] - cls.depth[a] || a - b);
-    const F = 9, inst = new Float32Array(S.n * F), pos = S.shown;
-    for (let i = 0; i < S.n; ++i) {
-      const p = order[i];
-      inst[F * i] = pos[3 * p]; inst[F * i + 1] = pos[3 * p + 1]; inst[F * i + 2] = pos[3 * p + 2];
-      inst[F * i + 3] = S.radius[p];
-      inst[F * i + 4] = S.color[3 * p]; inst[F * i + 5] = S.color[3 * p + 1]; inst[F * i + 6] = S.color[3 * p + 2];
-      inst[F * i + 7] = S.n * S.phi[p];
-      inst[F * i + 8] = S.shape[p];
+    const count = cls.items.length;
+    const order = new Uint32Array(count);
+    for (let i = 0; i < count; ++i) order[i] = i;
+    const key = (i) => (cls.items[i] >= 0 ? cls.items[i] : S.n - 1 - cls.items[i]);   // particles, then nodes
+    if (count <= SORT_LIMIT) order.sort((a, b) => cls.depths[b] - cls.depths[a] || key(a) - key(b));
+    const F = 9, inst = new Float32Array(count * F), pos = S.shown, nd = S.nodes;
+    for (let i = 0; i < count; ++i) {
+      const item = cls.items[order[i]], o = F * i;
+      if (item >= 0) {
+        inst[o] = pos[3 * item]; inst[o + 1] = pos[3 * item + 1]; inst[o + 2] = pos[3 * item + 2];
+        inst[o + 3] = S.radius[item];
+        inst[o + 4] = S.color[3 * item]; inst[o + 5] = S.color[3 * item + 1]; inst[o + 6] = S.color[3 * item + 2];
+        inst[o + 7] = S.n * S.phi[item];
+        inst[o + 8] = S.shape[item];
+      } else {
+        // A node kernel: radius 0 puts it in the field pass with weight 1 (R1-RND-045).
+        const b = (-1 - item) * NODE_FLOATS;
+        inst[o] = nd[b]; inst[o + 1] = nd[b + 1]; inst[o + 2] = nd[b + 2];
+        inst[o + 3] = 0;
+        inst[o + 4] = nd[b + 6]; inst[o + 5] = nd[b + 7]; inst[o + 6] = nd[b + 8];
+        inst[o + 7] = S.n * nd[b + 16];
+        inst[o + 8] = 0;
+      }
     }
     gl.bindBuffer(gl.ARRAY_BUFFER, G.instances);
     gl.bufferData(gl.ARRAY_BUFFER, inst, gl.DYNAMIC_DRAW);
+    G.instanceCount = count;
   }
   function uploadTubes(tubes) {
     const data = new Float32Array(tubes.length * 15);
@@ -693,15 +766,15 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     gl.bindVertexArray(G.vao);
     const pass = gl.getUniformLocation(G.particle, 'uPass');
     gl.uniform1i(pass, 0);
-    gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, S.n);
+    gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount);
     // The field, then the splats: premultiplied "over", far to near, depth-tested against the
     // opaque layer (R1-RND-070).
     gl.enable(gl.BLEND);
     gl.blendFunc(gl.ONE, gl.ONE_MINUS_SRC_ALPHA);
     gl.depthMask(false);
-    if (S.showField) { gl.uniform1i(pass, 2); gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, S.n); }
+    if (S.showField) { gl.uniform1i(pass, 2); gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount); }
     gl.uniform1i(pass, 1);
-    gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, S.n);
+    gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount);
     gl.disable(gl.BLEND);
     gl.depthMask(true);
     gl.bindVertexArray(null);
@@ -721,7 +794,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     const t1 = S.meta.tiers.t1, labelled = [];
     for (let p = 0; p < S.n; ++p) {
       if (!(cls.size[p] > t1)) continue;
-      const rel = sub(P(p), c.position), d = cls.depth[p];
+      const rel = sub(P(p), c.position), d = dot(rel, f.forward);
       labelled.push({ p, d, px: S.width / 2 + dot(rel, f.right) / d * f.focal, py: S.height / 2 - dot(rel, f.up) / d * f.focal,
                       rp: S.radius[p] * f.focal / d });
     }
@@ -755,6 +828,8 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
   }
   function animate(now) {
     const dt = S.lastFrame ? Math.min(0.1, (now - S.lastFrame) / 1000) : 0;
+    // The frame time is the interval between displayed frames (GPU work included), smoothed.
+    if (S.lastFrame && S.meta) S.frameMs = S.frameMs ? 0.8 * S.frameMs + 0.2 * (now - S.lastFrame) : now - S.lastFrame;
     S.lastFrame = now;
     if (S.flights.length) {
       const fl = S.flights[0];
@@ -776,11 +851,18 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     }
     if (S.meta) {
       if (S.frozenTime === null) S.time = now / 1000;
-      const t0 = performance.now();
       const c = S.cam, f = cameraFrame(c);
       // The CPU side (tiers, order, bundles) is redone only when the camera or the positions moved.
+      // While the camera moves, a recomputation that takes long (10^6 particles) runs at most once
+      // per three of its own durations; the shaders place and tier the instances every frame, and
+      // the frame after the camera stops is always exact.
       const key = JSON.stringify([c, S.width, S.height, S.gen]);
-      if (moved || key !== G.tubeKey) {
+      const still = key === G.lastKey;
+      G.lastKey = key;
+      const due = still || !G.lastCpu || now - G.lastCpu >= 3 * (S.cpuMs || 0);
+      if ((moved || key !== G.tubeKey) && due) {
+        G.lastCpu = now;
+        const tc = performance.now();
         G.tubeKey = key;
         const cls = classify(c, f);
         G.cls = cls;
@@ -788,10 +870,9 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
         uploadTubes(S.showEdges ? bundle(c, f, cls.size) : []);
         S.labelsDrawn = drawLabels(c, f, cls);
         S.tierCounts = cls.counts; S.visible = cls.visible;
+        S.cpuMs = performance.now() - tc;
       }
       draw(c, f);
-      gl.finish();
-      S.frameMs = performance.now() - t0;
       status();
       const waiting = S.pending; S.pending = [];
       for (const r of waiting) r();
@@ -801,7 +882,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
   function status() {
     const c = S.cam, p = c.position;
     document.getElementById('status').textContent =
-      `${S.meta.epoch} (generation ${S.gen}): ${S.n} particles, ${S.m} links   frame ${S.frameMs.toFixed(1)} ms\n` +
+      `${S.meta.epoch} (generation ${S.gen}): ${S.n} particles, ${S.m} links   frame ${S.frameMs.toFixed(1)} ms, ${G.instanceCount} instances\n` +
       `T0 ${S.tierCounts[0]}  T1 ${S.tierCounts[1]}  T2 ${S.tierCounts[2]}  T3 ${S.tierCounts[3]}  Tinf ${S.tierCounts[4]}   ` +
       `eye ${p.map((v) => v.toFixed(1)).join(' ')}  fov ${c.fov.toFixed(0)}  tau ${tauCam(c).toPrecision(3)}`;
   }
@@ -997,6 +1078,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     frame: () => nextFrame(),
     stats: () => ({ frameMs: S.frameMs, tiers: S.tierCounts.slice(), visible: S.visible, labels: S.labelsDrawn,
                     n: S.n, m: S.m, generation: S.gen, tau: tauCam(S.cam), flying: S.flights.length > 0,
-                    portal: S.portal ? S.portal.p : -1, width: S.width, height: S.height }),
+                    portal: S.portal ? S.portal.p : -1, width: S.width, height: S.height, instances: G.instanceCount, cpuMs: S.cpuMs,
+                    tubes: G.tubeCount }),
   };
 })();
