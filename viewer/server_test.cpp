@@ -7,6 +7,11 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -151,6 +156,22 @@ TEST_F(ViewerServer, NothingOutsideWhatItServes) {
   auto del = client_->Delete("/data/1/positions.f64");
   ASSERT_TRUE(del);
   EXPECT_GE(del->status, 400);
+  // Raw garbage, a request line without a version, an oversized header: refused, nothing breaks.
+  for (const std::string& raw : {std::string("GARBAGE\r\n\r\n"), std::string("GET /meta.json\r\n\r\n"),
+                                "GET / HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(200000, 'a') + "\r\n\r\n",
+                                std::string("GET /find?q=%ZZ%00 HTTP/1.1\r\nHost: x\r\n\r\n")}) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(fd, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    (void)!send(fd, raw.data(), raw.size(), MSG_NOSIGNAL);
+    char buf[256];
+    (void)!recv(fd, buf, sizeof buf, 0);
+    close(fd);
+  }
   auto ok = client_->Get("/meta.json");
   ASSERT_TRUE(ok);
   EXPECT_EQ(ok->status, 200);

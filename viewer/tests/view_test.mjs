@@ -83,6 +83,13 @@ try {
   const moved = Math.hypot(...steps[9].map((v, i) => v - eye[i]));
   check(moved > 1, `follow-flow moves the camera (${moved.toFixed(1)} scene units in 1 s)`);
 
+  // Camera-to-tau (R-1.0 9.5): the page's tau is tau0 (1 + |camera - centroid| / R_scene)^2.
+  const meta = await (await fetch(`${main.url}meta.json`)).json();
+  const cam = await page.evaluate(() => window.r1view.camera());
+  const g = 1 + Math.hypot(...cam.position.map((v, i) => v - meta.centroid[i])) / meta.scene_radius;
+  const tau = (await page.evaluate(() => window.r1view.stats())).tau;
+  check(Math.abs(tau - meta.tau0 * g * g) <= 1e-12 * tau, `camera-to-tau: ${tau.toFixed(3)} = tau0 (1 + d / R_scene)^2`);
+
   // Portal step (R-1.0 9.3): in until the particle is past s_T0, back out to where it started.
   await page.evaluate(([e, t]) => window.r1view.setCamera({ eye: e, target: t }), [[600, 100, 300], target]);
   const p = await page.evaluate(() => window.r1view.find('Math entity 1'));
