@@ -639,23 +639,25 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     G.tubes = gl.createBuffer();
     G.vao = gl.createVertexArray();
     G.tubeVao = gl.createVertexArray();
-    const attrib = (loc, size, stride, offset) => {
-      gl.enableVertexAttribArray(loc);
-      gl.vertexAttribPointer(loc, size, gl.FLOAT, false, stride, offset);
-      gl.vertexAttribDivisor(loc, 1);
+    // A vertex array: the corner buffer per vertex, then the instance buffer's float attributes
+    // (sizes in floats, packed in order) per instance.
+    const instanced = (vao, corners, instances, sizes) => {
+      gl.bindVertexArray(vao);
+      gl.bindBuffer(gl.ARRAY_BUFFER, corners);
+      gl.enableVertexAttribArray(0);
+      gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
+      gl.bindBuffer(gl.ARRAY_BUFFER, instances);
+      const stride = 4 * sizes.reduce((a, b) => a + b, 0);
+      let offset = 0;
+      sizes.forEach((size, i) => {
+        gl.enableVertexAttribArray(i + 1);
+        gl.vertexAttribPointer(i + 1, size, gl.FLOAT, false, stride, offset);
+        gl.vertexAttribDivisor(i + 1, 1);
+        offset += 4 * size;
+      });
     };
-    gl.bindVertexArray(G.vao);
-    gl.bindBuffer(gl.ARRAY_BUFFER, G.quad);
-    gl.enableVertexAttribArray(0);
-    gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
-    gl.bindBuffer(gl.ARRAY_BUFFER, G.instances);
-    attrib(1, 3, 36, 0); attrib(2, 1, 36, 12); attrib(3, 3, 36, 16); attrib(4, 1, 36, 28); attrib(5, 1, 36, 32);
-    gl.bindVertexArray(G.tubeVao);
-    gl.bindBuffer(gl.ARRAY_BUFFER, G.strip);
-    gl.enableVertexAttribArray(0);
-    gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
-    gl.bindBuffer(gl.ARRAY_BUFFER, G.tubes);
-    attrib(1, 3, 60, 0); attrib(2, 3, 60, 12); attrib(3, 3, 60, 24); attrib(4, 3, 60, 36); attrib(5, 3, 60, 48);
+    instanced(G.vao, G.quad, G.instances, [3, 1, 3, 1, 1]);     // centre, radius, colour, n phi, shape
+    instanced(G.tubeVao, G.strip, G.tubes, [3, 3, 3, 3, 3]);    // a, b, colour a, colour b, (rho, stripes, speed)
     gl.bindVertexArray(null);
   }
   // Instances (centre, radius, linear colour, n phi, shape as float32), far to near so that the
