@@ -15,6 +15,7 @@
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/input_file.hpp"
+#include "render/legibility.hpp"
 #include "render/navigation.hpp"
 #include "render/neural_field.hpp"
 #include "render/renderer.hpp"
@@ -31,7 +32,7 @@ struct RenderCliOptions {
   int orbit = 0;
   std::vector<double> eye, target, up;
   double fov = 0, time = 0, distance = 0;
-  bool no_edges = false, no_labels = false, no_field = false, quiet = false;
+  bool no_edges = false, no_labels = false, no_field = false, quiet = false, legibility = false;
   std::string field = "analytic", field_file;
   std::string path, write_path;  // R1-VIEW-050: a camera path (warp:QUERY, follow:SECONDS) and its poses
   double fps = 30;
@@ -263,6 +264,14 @@ Status run_render(const RenderCliOptions& c) {
     const fs::path path = frame_path(c.out, static_cast<int>(k), static_cast<int>(views.size()));
     R1_TRY(render::write_image(images[k], path, render::srgb8_to_linear(views[k].background)));
     if (!c.quiet) print_stats(path, views[k], stats[k]);
+    if (c.legibility) {
+      // R1-RND-120..123.
+      const render::Legibility l = render::legibility(scene, views[k]);
+      std::printf("  legibility: %.1f%% of %llu shape particles overlapped by a nearer one; the middle 90%% of %llu visible "
+                  "particles spans %.2f%% of the image; %.1f%% of all particles coincide with another\n",
+                  100 * l.overlap_share, static_cast<unsigned long long>(l.shapes), static_cast<unsigned long long>(l.visible),
+                  100 * l.core_share, 100 * l.coincident_share);
+    }
     if (!c.quiet && use_neural)
       std::printf("  field: %s\n", stats[k].field_neural > 0 ? "neural"
                                       : "analytic (the frame is not pure T-infinity, R1-NRF-031)");
@@ -296,6 +305,7 @@ void add_render(CLI::App& app, Runner& selected) {
   cmd->add_option("--path", c->path, "a camera path from the view: warp:QUERY (a title or hex id prefix) or follow:SECONDS; frames OUT-000 ...");
   cmd->add_option("--fps", c->fps, "frames per second along --path (30)");
   cmd->add_option("--write-path", c->write_path, "write the path's poses as JSON (without -o: only that)");
+  cmd->add_flag("--legibility", c->legibility, "also print the frame's legibility measures (spec/render.md R1-RND-120)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");
   c->backend.add_to(*cmd);
   cmd->callback([c, &selected] { selected = [c] { return run_render(*c); }; });

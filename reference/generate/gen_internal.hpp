@@ -131,6 +131,7 @@ Result<Snapshot> gen_complete(const Resolved& p, std::string card, const Progres
 Result<Snapshot> gen_sbm(const Resolved& p, std::string card, const ProgressFn& progress);
 Result<Snapshot> gen_ba(const Resolved& p, std::string card, const ProgressFn& progress);
 Result<Snapshot> gen_rgg(const Resolved& p, std::string card, const ProgressFn& progress);
+Result<Snapshot> gen_rmat(const Resolved& p, std::string card, const ProgressFn& progress);
 Result<Snapshot> gen_crystal(const Resolved& p, std::string card, const ProgressFn& progress);
 
 }  // namespace r1::gen

@@ -28,6 +28,8 @@ constexpr GenKindInfo kKinds[] = {
      "--n N (1000; 2..2^24) --radius R (0.15; 0 < R <= 2)"},
     {GenKind::kCrystal, "crystal", "crystal-genesis-like: 5040 particles, 21 domains in 7 triads",
      kGenOptPIn | kGenOptPTriad | kGenOptPOut, "--p-in P (0.05, same domain) --p-triad P (0.008) --p-out P (0.0005)"},
+    {GenKind::kRmat, "rmat", "R-MAT (Graph500 a b c = 0.57 0.19 0.19): heavy-tailed, many low-degree nodes",
+     kGenOptN | kGenOptM, "--n N (16384; 2..2^24 node ids) --m M (16; 1..1024 links drawn per node id)"},
 };
 
 struct OptionName {
@@ -191,6 +193,14 @@ Result<gen::Resolved> resolve(const GenParams& g) {
                        " links expected, more than the " + std::to_string(kGenMaxLinks) + " allowed");
       break;
     }
+    case GenKind::kRmat: {
+      R1_ASSIGN(out.n, r.integer(g.n, 16384, 2, kGenMaxNodes, "--n"));
+      R1_ASSIGN(out.m, r.integer(g.m, 16, 1, 1024, "--m"));
+      const std::uint64_t links = static_cast<std::uint64_t>(out.n) * out.m;
+      if (links > static_cast<std::uint64_t>(kGenMaxLinks))
+        return r.error(std::to_string(links) + " links, more than the " + std::to_string(kGenMaxLinks) + " allowed");
+      break;
+    }
     case GenKind::kCrystal: {
       out.n = 5040;
       R1_ASSIGN(out.p_in, r.probability(g.p_in, 0.05, "--p-in"));
@@ -227,6 +237,7 @@ std::string command_line(const gen::Resolved& p) {
       add("--p-out", num(p.p_out));
       break;
     case GenKind::kBa:
+    case GenKind::kRmat:
       add("--n", std::to_string(p.n));
       add("--m", std::to_string(p.m));
       break;
@@ -256,6 +267,7 @@ Result<Snapshot> dispatch(const gen::Resolved& p, std::string card, const Progre
     case GenKind::kBa: return gen::gen_ba(p, std::move(card), progress);
     case GenKind::kRgg: return gen::gen_rgg(p, std::move(card), progress);
     case GenKind::kCrystal: return gen::gen_crystal(p, std::move(card), progress);
+    case GenKind::kRmat: return gen::gen_rmat(p, std::move(card), progress);
   }
   return Status::internal("gen: unhandled kind");
 }

@@ -242,6 +242,33 @@ TEST(GenRandom, SbmSizesAndExtremes) {
   }
 }
 
+TEST(GenRandom, RmatIsHeavyTailedWithManyLowDegreeNodes) {
+  auto p = params(GenKind::kRmat);
+  p.n = 3000;  // not a power of two: draws beyond node 2999 are redrawn (R1-GEN-026)
+  p.m = 8;
+  const Snapshot s = gen(p);
+  ASSERT_EQ(s.links.size(), 3000u * 8u);
+  expect_text_links(s);
+  expect_first_appearance(s);
+  const auto node = nodes_of(s);
+  for (const auto& l : s.links) {
+    EXPECT_NE(node[l.from], node[l.to]) << "no self-loops";
+    EXPECT_LT(node[l.from], 3000u);
+    EXPECT_LT(node[l.to], 3000u);
+  }
+  std::vector<std::uint32_t> d = degrees(s, 3000);
+  std::erase(d, 0u);  // ids never drawn are not particles
+  EXPECT_EQ(d.size(), s.particles.size());
+  std::sort(d.begin(), d.end());
+  const double mean = 2.0 * static_cast<double>(s.links.size()) / static_cast<double>(d.size());
+  // Heavy-tailed: the largest degree is tens of means; most nodes are below the mean.
+  EXPECT_GT(static_cast<double>(d.back()), 20.0 * mean);
+  EXPECT_LT(static_cast<double>(d[d.size() / 2]), 0.6 * mean);
+  // Graph500's skew: node 0 (all-zero bits, quadrant a every level) is the biggest hub.
+  const auto all = degrees(s, 3000);
+  EXPECT_EQ(std::max_element(all.begin(), all.end()) - all.begin(), 0);
+}
+
 TEST(GenRandom, BarabasiAlbert) {
   auto p = params(GenKind::kBa);
   p.n = 5000;
@@ -395,7 +422,7 @@ TEST(GenCrystal, Axioms) {
 
 TEST(GenDeterminism, SameSeedSameSnapshotDifferentSeedDifferent) {
   // The crystal's seed dependence is checked in PinnedDigests (it is the slowest to generate).
-  for (GenKind kind : {GenKind::kSbm, GenKind::kBa, GenKind::kRgg}) {
+  for (GenKind kind : {GenKind::kSbm, GenKind::kBa, GenKind::kRgg, GenKind::kRmat}) {
     auto p = params(kind);
     const std::string a = digest_hex(gen(p)), b = digest_hex(gen(p));
     p.seed = 2;
@@ -435,6 +462,7 @@ TEST(GenDeterminism, PinnedDigests) {
       {GenKind::kSbm, "a9efaac7021643ede9b34cee831371711cd215c161680cd1468f76857588b354"},
       {GenKind::kRgg, "4c6524afb9b1e2cb1201383844bd708dbec545624ffeca20a1563f1b75febf4c"},
       {GenKind::kTorus, "8450dc85554ba7a83f95dd56b54c2e83c16655c68d1c985c7adb2d1094e5620e"},
+      {GenKind::kRmat, "178bd3aa9080ea263df4db6f8e1aa720af22aad05c4f918c58fb8cea581f489d"},
   };
   for (const auto& [kind, digest] : golden) EXPECT_EQ(digest_hex(gen(params(kind))), digest) << r1::gen_kind_info(kind).name;
   auto crystal = params(GenKind::kCrystal);
@@ -563,7 +591,7 @@ TEST(GenValidation, ParseDims) {
 }
 
 TEST(GenFront, KindsHelpAndCommandLine) {
-  EXPECT_EQ(r1::gen_kinds().size(), 10u);
+  EXPECT_EQ(r1::gen_kinds().size(), 11u);
   for (const auto& k : r1::gen_kinds()) {
     EXPECT_EQ(r1::gen_kind_from_name(k.name).value(), k.kind);
     EXPECT_NE(r1::gen_help_text().find(std::string(k.name)), std::string::npos);

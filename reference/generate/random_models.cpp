@@ -63,4 +63,33 @@ Result<Snapshot> gen_ba(const Resolved& p, std::string card, const ProgressFn& p
   return e.finish(std::move(card), progress);
 }
 
+// R-MAT (Chakrabarti, Zhan and Faloutsos 2004) with Graph500's quadrant probabilities
+// (R1-GEN-025..027): m n links, each drawn by `scale` quadrant choices in the 2^scale adjacency
+// matrix; draws outside the n node ids or on the diagonal are redrawn.
+Result<Snapshot> gen_rmat(const Resolved& p, std::string card, const ProgressFn& progress) {
+  std::uint32_t scale = 0;
+  while ((std::uint64_t{1} << scale) < p.n) ++scale;
+  // Cumulative thresholds of a, a + b, a + b + c as 32-bit integers (R1-GEN-007).
+  const std::uint64_t ta = prob_threshold(0.57), tb = prob_threshold(0.76), tc = prob_threshold(0.95);
+  const std::uint64_t links = static_cast<std::uint64_t>(p.n) * p.m;
+  Emitter e("gen:rmat", p.n, indexed_names("rmat"));
+  e.reserve_links(links);
+  constexpr std::uint64_t kReportEvery = 1u << 16;
+  for (std::uint64_t k = 0; k < links; ++k) {
+    for (std::uint64_t attempt = 0;; ++attempt) {
+      std::uint32_t from = 0, to = 0;
+      for (std::uint32_t level = 0; level < scale; ++level) {
+        const std::uint64_t u = rng::bits(p.seed, k, (attempt << 8) + level) >> 32;
+        from = (from << 1) | (u >= tb ? 1u : 0u);
+        to = (to << 1) | ((u >= ta && u < tb) || u >= tc ? 1u : 0u);
+      }
+      if (from >= p.n || to >= p.n || from == to) continue;
+      e.link(from, to);
+      break;
+    }
+    if (k % kReportEvery == 0 || k + 1 == links) report(progress, "generating rmat", k + 1, links);
+  }
+  return e.finish(std::move(card), progress);
+}
+
 }  // namespace r1::gen

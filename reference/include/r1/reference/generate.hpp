@@ -15,12 +15,12 @@
 
 namespace r1 {
 
-enum class GenKind : std::uint8_t { kRing, kPath, kStar, kGrid, kTorus, kComplete, kSbm, kBa, kRgg, kCrystal };
+enum class GenKind : std::uint8_t { kRing, kPath, kStar, kGrid, kTorus, kComplete, kSbm, kBa, kRgg, kCrystal, kRmat };
 
 // The options a kind may take, as bits of GenKindInfo::options (R1-GEN-003).
 enum GenOption : std::uint32_t {
   kGenOptN = 1u << 0,       // --n: nodes
-  kGenOptM = 1u << 1,       // --m: links per new node (ba)
+  kGenOptM = 1u << 1,       // --m: links per new node (ba), links per node (rmat)
   kGenOptK = 1u << 2,       // --k: blocks (sbm)
   kGenOptSizes = 1u << 3,   // --sizes: block sizes (sbm)
   kGenOptDims = 1u << 4,    // --dims: WxH (grid) or AxBxC (torus)
