@@ -235,12 +235,10 @@ Status run_render(const RenderCliOptions& c) {
   }
   for (auto& v : views) R1_TRY(render::validate_view(v, "render"));
   if (!c.write_view.empty()) R1_TRY(write_file_atomic(c.write_view, render::view_toml(views.front())));
-  if (!c.write_path.empty()) {
+  if (path_only) {
     R1_TRY(write_file_atomic(c.write_path, path_json(views, c.fps)));
-    if (path_only) {
-      if (!c.quiet) std::printf("%s: %zu poses of %s\n", c.write_path.c_str(), views.size(), c.path.c_str());
-      return Status::ok();
-    }
+    if (!c.quiet) std::printf("%s: %zu poses of %s\n", c.write_path.c_str(), views.size(), c.path.c_str());
+    return Status::ok();
   }
 
   // Render every view first, then write: a failed frame leaves no images behind (R1-ERR-003).
@@ -276,6 +274,8 @@ Status run_render(const RenderCliOptions& c) {
       std::printf("  field: %s\n", stats[k].field_neural > 0 ? "neural"
                                       : "analytic (the frame is not pure T-infinity, R1-NRF-031)");
   }
+  // The poses after the frames they belong to (R1-ERR-003: a failed frame leaves neither).
+  if (!c.write_path.empty()) R1_TRY(write_file_atomic(c.write_path, path_json(views, c.fps)));
   if (!c.quiet) std::printf("%zu image%s in %.2f s\n", views.size(), views.size() == 1 ? "" : "s", seconds_since(t0));
   return Status::ok();
 }

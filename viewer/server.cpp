@@ -6,12 +6,12 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
-#include <cstring>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <thread>
 #include <unordered_map>
 
+#include "r1/format/bytes.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "render/image.hpp"
 #include "render/navigation.hpp"
@@ -30,12 +30,6 @@ const std::string* Bundle::array(std::string_view name) const {
 
 namespace {
 
-template <class T>
-void put(std::string& out, const T& v) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));  // little-endian hosts only (R1-FMT: r1 builds for x86-64 and ARM LE)
-  out.append(b, sizeof(T));
-}
 
 nlohmann::json vec(const render::Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 
@@ -60,14 +54,13 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
   b->dir = dir;
   std::string pos, radius, phi, color, shape, edges, weights, a2, degree, clusters, nodes, prev;
   for (std::uint32_t p = 0; p < s.n; ++p) {
-    put(pos, s.position[p].x), put(pos, s.position[p].y), put(pos, s.position[p].z);
-    put(radius, s.radius[p]);
-    put(phi, s.phi[p]);
-    put(color, static_cast<float>(s.color[p].x)), put(color, static_cast<float>(s.color[p].y)),
-        put(color, static_cast<float>(s.color[p].z));
-    shape.push_back(static_cast<char>(s.shape[p]));
-    put(degree, s.degree[p]);
-    for (int l = 0; l < kLevels; ++l) put(clusters, s.hierarchy->cluster_of[static_cast<std::size_t>(l)][p]);
+    for (const double x : {s.position[p].x, s.position[p].y, s.position[p].z}) format::put_f64(pos, x);
+    format::put_f64(radius, s.radius[p]);
+    format::put_f64(phi, s.phi[p]);
+    for (const double x : {s.color[p].x, s.color[p].y, s.color[p].z}) format::put_f32(color, static_cast<float>(x));
+    format::put_u8(shape, static_cast<std::uint8_t>(s.shape[p]));
+    format::put_f64(degree, s.degree[p]);
+    for (int l = 0; l < kLevels; ++l) format::put_u32(clusters, s.hierarchy->cluster_of[static_cast<std::size_t>(l)][p]);
   }
   // Per hierarchy node, level by level: the render scene's aggregates (R1-RND-013) and its parent,
   // for the page's edge bundles (R1-RND-064..066): centroid x y z, extent, max radius,
@@ -81,13 +74,14 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
       for (const double v : {d.centroid.x, d.centroid.y, d.centroid.z, d.extent, d.max_radius, d.radius, d.color.x, d.color.y,
                              d.color.z, parent == 0xFFFFFFFFu ? -1.0 : static_cast<double>(parent), d.lo.x, d.lo.y, d.lo.z,
                              d.hi.x, d.hi.y, d.hi.z, d.phi, static_cast<double>(d.count)})
-        put(nodes, v);
+        format::put_f64(nodes, v);
     }
   }
   for (const LayoutEdge& edge : s.edges) {
-    put(edges, edge.p), put(edges, edge.q);
-    put(weights, Q32::from_raw(edge.w_raw).to_double());
-    put(a2, Q32::from_raw(edge.a2_raw).to_double());
+    format::put_u32(edges, edge.p);
+    format::put_u32(edges, edge.q);
+    format::put_f64(weights, Q32::from_raw(edge.w_raw).to_double());
+    format::put_f64(a2, Q32::from_raw(edge.a2_raw).to_double());
   }
   b->ids = e.ids;
   b->titles = e.titles;
@@ -100,7 +94,7 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
     for (std::uint32_t p = 0; p < previous->ids.size(); ++p) index.emplace(key(previous->ids[p]), p);
     for (std::uint32_t p = 0; p < s.n; ++p) {
       const auto it = index.find(key(b->ids[p]));
-      put(prev, it == index.end() ? 0xffffffffu : it->second);
+      format::put_u32(prev, it == index.end() ? 0xffffffffu : it->second);
     }
   }
   b->arrays = {{"positions.f64", std::move(pos)}, {"radius.f64", std::move(radius)}, {"phi.f64", std::move(phi)},
