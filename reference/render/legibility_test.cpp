@@ -8,8 +8,8 @@
 #include <cmath>
 
 #include "r1/fixedpoint/counter_rng.hpp"
-#include "r1/reference/hierarchy.hpp"
 #include "cull.hpp"
+#include "test_epochs.hpp"
 #include "view.hpp"
 
 namespace {
@@ -18,24 +18,9 @@ using namespace r1::render;
 using r1::Q32;
 
 r1::Epoch epoch_at(const std::vector<Vec3>& pos, const std::vector<double>& radius) {
-  r1::Epoch e;
-  const std::size_t n = pos.size();
-  e.snapshot_digest = r1::hemera::hash("legibility-test");
-  const std::int64_t share = Q32::kOneRaw / static_cast<std::int64_t>(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    e.ids.push_back(r1::hemera::hash("q" + std::to_string(i)));
-    e.titles.push_back("");
-    e.focus.phi.push_back(Q32::from_raw(i == 0 ? Q32::kOneRaw - share * static_cast<std::int64_t>(n - 1) : share));
-    e.frame.position.push_back({Q32::from_double(pos[i].x), Q32::from_double(pos[i].y), Q32::from_double(pos[i].z)});
-    e.encoding.radius.push_back(Q32::from_double(radius[i]));
-    e.encoding.shape.push_back(r1::Shape::kSphere);
-    e.encoding.color.push_back({100, 120, 200});
-  }
-  for (auto& u : e.spectrum.u) u.assign(n, Q32{});
-  auto h = r1::build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids);
-  EXPECT_TRUE(h.is_ok()) << h.status().message();
-  e.hierarchy = *h;
-  return e;
+  std::vector<test::TestParticle> ps;
+  for (std::size_t i = 0; i < pos.size(); ++i) ps.push_back({pos[i], radius[i]});
+  return test::epoch_from("legibility-test", ps, "q");
 }
 
 // Looking down -z from z = 1000 with a 90-degree field of view on a 200 x 200 image: the plane

@@ -9,8 +9,8 @@
 
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
-#include "r1/reference/hierarchy.hpp"
 #include "scene.hpp"
+#include "test_epochs.hpp"
 
 namespace {
 
@@ -19,27 +19,14 @@ using r1::Q32;
 
 // n particles in four Gaussian blobs (scene units), equal focus, a real hierarchy.
 r1::Epoch blob_epoch(std::uint32_t n) {
-  r1::Epoch e;
-  e.snapshot_digest = r1::hemera::hash("neural-test");
-  const std::int64_t share = Q32::kOneRaw / static_cast<std::int64_t>(n);
   const Vec3 centres[4] = {{-300, 0, 0}, {300, 50, 0}, {0, 300, -100}, {0, -250, 200}};
+  std::vector<test::TestParticle> ps;
   for (std::uint32_t i = 0; i < n; ++i) {
-    const Vec3 c = centres[i % 4];
     auto g = [&](std::uint64_t d) { return 60 * (r1::rng::uniform_double(7, i, d) + r1::rng::uniform_double(7, i, d + 1) - 1); };
-    const Vec3 p = c + Vec3{g(0), g(2), g(4)};
-    e.ids.push_back(r1::hemera::hash("p" + std::to_string(i)));
-    e.titles.push_back("");
-    e.focus.phi.push_back(Q32::from_raw(i == 0 ? Q32::kOneRaw - share * static_cast<std::int64_t>(n - 1) : share));
-    e.frame.position.push_back({Q32::from_double(p.x), Q32::from_double(p.y), Q32::from_double(p.z)});
-    e.encoding.radius.push_back(Q32::from_double(5));
-    e.encoding.shape.push_back(r1::Shape::kSphere);
-    e.encoding.color.push_back({static_cast<std::uint8_t>(60 * (i % 4) + 20), 120, static_cast<std::uint8_t>(200 - 40 * (i % 4))});
+    ps.push_back({centres[i % 4] + Vec3{g(0), g(2), g(4)}, 5, r1::Shape::kSphere,
+                  {static_cast<std::uint8_t>(60 * (i % 4) + 20), 120, static_cast<std::uint8_t>(200 - 40 * (i % 4))}});
   }
-  for (auto& u : e.spectrum.u) u.assign(n, Q32{});
-  auto h = r1::build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids);
-  EXPECT_TRUE(h.is_ok()) << h.status().message();
-  e.hierarchy = *h;
-  return e;
+  return test::epoch_from("neural-test", ps);
 }
 
 NeuralConfig small_config() {

@@ -15,6 +15,7 @@
 #include "r1/reference/ply_export.hpp"
 #include "renderer.hpp"
 #include "shapes.hpp"
+#include "test_epochs.hpp"
 
 namespace {
 
@@ -24,24 +25,10 @@ using r1::Q32;
 // An epoch of n particles at the given positions (scene units) with equal focus, radius r and
 // the given shape; ids from their index; a real hierarchy; edges between consecutive particles.
 r1::Epoch make_epoch(const std::vector<Vec3>& pos, double r, r1::Shape shape) {
-  r1::Epoch e;
-  const std::size_t n = pos.size();
-  e.snapshot_digest = r1::hemera::hash("render-test");
-  const std::int64_t share = Q32::kOneRaw / static_cast<std::int64_t>(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    e.ids.push_back(r1::hemera::hash("p" + std::to_string(i)));
-    e.titles.push_back("");
-    e.focus.phi.push_back(Q32::from_raw(i == 0 ? Q32::kOneRaw - share * static_cast<std::int64_t>(n - 1) : share));
-    e.frame.position.push_back({Q32::from_double(pos[i].x), Q32::from_double(pos[i].y), Q32::from_double(pos[i].z)});
-    e.encoding.radius.push_back(Q32::from_double(r));
-    e.encoding.shape.push_back(shape);
-    e.encoding.color.push_back({static_cast<std::uint8_t>(40 + i % 200), 120, 200});
-  }
-  for (auto& u : e.spectrum.u) u.assign(n, Q32{});
-  auto h = r1::build_hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids);
-  EXPECT_TRUE(h.is_ok()) << h.status().message();
-  e.hierarchy = *h;
-  for (std::uint32_t i = 0; i + 1 < n; ++i) e.edges.push_back({i, i + 1, Q32::kOneRaw, 0});
+  std::vector<test::TestParticle> ps;
+  for (std::size_t i = 0; i < pos.size(); ++i) ps.push_back({pos[i], r, shape, {static_cast<std::uint8_t>(40 + i % 200), 120, 200}});
+  r1::Epoch e = test::epoch_from("render-test", ps);
+  for (std::uint32_t i = 0; i + 1 < pos.size(); ++i) e.edges.push_back({i, i + 1, Q32::kOneRaw, 0});
   return e;
 }
 
