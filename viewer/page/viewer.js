@@ -152,7 +152,7 @@
     const g = 1 + len(sub(c.position, S.meta.centroid)) / S.meta.scene_radius;
     return S.meta.tau0 * g * g;
   }
-  const focalPx = (c) => (S.height / 2) / Math.tan((c.fov * Math.PI / 180) / 2);
+  const focalPx = (c) => cameraFrame(c).focal;
 
   // ---- loading -------------------------------------------------------------------------------------
   async function fetchArray(gen, name, Type) {
@@ -733,7 +733,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     far = Math.max(far, 1);
     return far + 4 * Math.max(Math.sqrt(tauCam(c)), 0.5 * far / f.focal + 1e-9);
   }
-  function setUniforms(p, c, f) {
+  function setUniforms(p, c, f, tfar) {
     gl.useProgram(p);
     const u = (name) => gl.getUniformLocation(p, name);
     gl.uniformMatrix3fv(u('uView'), false, viewMatrix(c.orientation));
@@ -744,11 +744,12 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     gl.uniform4f(u('uTiers'), t.t3, t.t2, t.t1, t.t0);
     gl.uniform1f(u('uBand'), t.band);
     gl.uniform1f(u('uTau'), tauCam(c));
-    gl.uniform1f(u('uTfar'), tFar(c, f));
+    gl.uniform1f(u('uTfar'), tfar);
     gl.uniform1f(u('uTime'), S.time);
   }
   function draw(c, f) {
     ensureTarget();
+    const tfar = tFar(c, f);   // once per frame, for both programs
     gl.bindFramebuffer(gl.FRAMEBUFFER, G.fb);
     gl.viewport(0, 0, S.width, S.height);
     const bg = S.meta.background;
@@ -760,11 +761,11 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     gl.disable(gl.BLEND);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
     if (G.tubeCount > 0) {
-      setUniforms(G.tube, c, f);
+      setUniforms(G.tube, c, f, tfar);
       gl.bindVertexArray(G.tubeVao);
       gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.tubeCount);
     }
-    setUniforms(G.particle, c, f);
+    setUniforms(G.particle, c, f, tfar);
     gl.bindVertexArray(G.vao);
     const pass = gl.getUniformLocation(G.particle, 'uPass');
     gl.uniform1i(pass, 0);
