@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include "content_pass.hpp"
 #include "r1/reference/ply_export.hpp"  // kSplatOpacity, kSplatSigmaPerRadius: one splat everywhere
 #include "shapes.hpp"
 
@@ -337,6 +338,8 @@ std::vector<Impostor> impostor_list(const Scene& s, const View& v, const CameraF
   std::vector<Impostor> out;
   for (const Visible& vis : culled.visible) {
     if (vis.tier > Tier::kT2) continue;
+    // A T0 particle with content opens: the content pass draws it instead (R1-RND-130).
+    if (vis.tier == Tier::kT0 && s.content && s.content->has(vis.particle)) continue;
     const std::uint32_t p = vis.particle;
     const double r = s.radius[p];
     const Vec3 c = s.position[p];
@@ -568,6 +571,8 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   const std::vector<Impostor> impostors = impostor_list(s, v, f, culled);
   if (passes.impostors) R1_TRY(passes.impostors(impostors, v, f, op));
   else draw_impostors(impostors, v, f, op);
+  // T0 content after the shapes, with the same nearest-hit rule (R1-RND-135).
+  st.content = draw_content(s, v, f, culled, op);
   st.impostor_s = seconds_since(t0);
 
   t0 = clock::now();
