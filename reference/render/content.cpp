@@ -27,6 +27,11 @@ constexpr std::array<std::string_view, 14> kImageTypes = {"png", "jpg",  "jpeg",
                                                          "gif", "webp", "tga",  "hdr", "ppm", "pgm",  "pnm"};
 // Types that must be UTF-8 text (R1-EPO-033).
 constexpr std::array<std::string_view, 4> kTextTypes = {"txt", "text", "md", "markdown"};
+// Types r1 does not draw, whatever their bytes (R1-EPO-033): documents, vector drawings, video,
+// sound, archives and components get a card naming the type even when their bytes are UTF-8.
+constexpr std::array<std::string_view, 22> kOtherTypes = {"pdf", "ps",  "svg",  "mp4", "webm", "mkv", "mov",  "avi",
+                                                         "mp3", "ogg", "wav",  "flac", "zip", "gz",  "tar",  "wasm",
+                                                         "doc", "docx", "xls", "xlsx", "ppt", "pptx"};
 
 template <std::size_t N>
 bool one_of(const std::array<std::string_view, N>& list, std::string_view s) {
@@ -104,7 +109,7 @@ void load_entry(const fs::path& base, const std::string& cell, ContentEntry& e) 
   } else if (one_of(kTextTypes, e.type)) {
     if (!is_utf8_text(e.bytes)) return fail(ContentStatus::kUnreadable, "not UTF-8 text");
     e.kind = ContentKind::kText;
-  } else if (is_utf8_text(e.bytes)) {
+  } else if (!one_of(kOtherTypes, e.type) && is_utf8_text(e.bytes)) {
     e.kind = ContentKind::kText;
     if (e.type.empty()) e.type = "text";
   } else {

@@ -113,6 +113,7 @@ TEST(ContentSideFile, TypesFromBytesAndExtension) {
   r1::test::write_file(d / "bad.txt", std::string("a\xff", 2));
   r1::test::write_file(d / "doc.pdf", std::string("%PDF-1.7\0\x01\x02", 11));
   r1::test::write_file(d / "notes", "plain words");
+  r1::test::write_file(d / "ascii.pdf", "%PDF-1.7\n");
   r1::test::write_file(d / "blob", std::string("\0\0\1", 3));
   r1::test::write_file(d / "fake.png", "not an image");
   const auto one = [&](const std::string& f) {
@@ -129,6 +130,9 @@ TEST(ContentSideFile, TypesFromBytesAndExtension) {
   EXPECT_EQ(e.type, "txt");
   EXPECT_EQ(one("bad.txt").status, ContentStatus::kUnreadable);
   e = one("doc.pdf");
+  EXPECT_EQ(e.kind, ContentKind::kOther);
+  EXPECT_EQ(e.type, "pdf");
+  e = one("ascii.pdf");  // a document type is a card even when its bytes are text
   EXPECT_EQ(e.kind, ContentKind::kOther);
   EXPECT_EQ(e.type, "pdf");
   e = one("notes");
