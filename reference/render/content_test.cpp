@@ -324,6 +324,26 @@ TEST(ContentFrame, TextIsTypesetOnACurvedPage) {
   EXPECT_LT(depth(right), 18.0 - 2.0);
 }
 
+TEST(ContentFrame, EdgesEnterAnOpenedParticleAtItsSphere) {
+  r1::test::TempDir d;
+  write_quadrants(d / "q.png", 64, 64);
+  OneParticle fr;
+  fr.epoch.edges.push_back({0, 1, r1::Q32::kOneRaw, 0});
+  const ContentSet c = side_for(fr, d.path(), "q.png");
+  const Image bare = fr.render(&c);
+  fr.view.edges = true;
+  FrameStats st;
+  const Image with_edges = fr.render(&c, &st);
+  ASSERT_GE(st.edges_drawn, 1u);
+  // The tube toward the other particle (up and to the right) starts at the sphere, behind the
+  // panel's plane and outside it: the panel's pixels are the same with and without edges.
+  std::size_t differ = 0;
+  for (int y = 20; y <= 180; ++y)
+    for (int x = 20; x <= 180; ++x) differ += rgb(bare, x, y) != rgb(with_edges, x, y);
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(differing(bare, with_edges), 0u);  // the tube is drawn outside the panel
+}
+
 TEST(ContentFrame, OnlyT0ParticlesWithContentOpen) {
   r1::test::TempDir d;
   OneParticle fr;

@@ -376,8 +376,28 @@ void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullR
   st.edges_in_view = bs.in_view;
   st.edges_considered = bs.considered;
   st.edges_drawn = bs.drawn;
+  // An opened particle (T0 with content, R1-RND-130) is entered by its edges at its bounding
+  // sphere, so they do not cross its content. A tube ends at it when the end is the particle or a
+  // cluster whose one member it is (the cluster's centroid is then the particle's position).
+  const auto opened_radius = [&](const Endpoint& e) {
+    if (!s.content) return 0.0;
+    std::int64_t p = e.level < 0 ? static_cast<std::int64_t>(e.id) : -1;
+    if (e.level >= 0 && s.nodes[static_cast<std::size_t>(e.level)][e.id].count == 1)
+      for_each_member(s, e.level, e.id, [&](std::uint32_t q) { p = q; });
+    if (p < 0) return 0.0;
+    const auto q = static_cast<std::uint32_t>(p);
+    return s.content->has(q) && size[q] > v.tiers.t0 ? s.radius[q] : 0.0;
+  };
   for (const Tube& tube : tubes) {
-    const Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
+    Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
+    const double cut_a = opened_radius(tube.a), cut_b = opened_radius(tube.b);
+    if (cut_a > 0 || cut_b > 0) {
+      const double len = length(b - a);
+      if (!(cut_a + cut_b < len)) continue;
+      const Vec3 dir = (b - a) / len;
+      b = b - dir * cut_b;
+      a = a + dir * cut_a;
+    }
     const double cap = 0.3 * std::min(endpoint_radius(s, tube.a), endpoint_radius(s, tube.b));
     const double rho = std::min(0.1 * s.median_radius * std::sqrt(tube.w), cap);
     if (!(rho > 0)) continue;
