@@ -19,9 +19,9 @@ namespace {
 // magnified much, small enough to keep one per content particle in memory.
 constexpr int kMaxImageSide = 2048;   // larger images are box-filtered down by a whole factor
 constexpr int kTextWidth = 1024;      // the text page, pixels
-constexpr int kTextSize = 28;         // its font size, pixels
-constexpr int kTextLine = 36;         // its line pitch, pixels
-constexpr int kTextMargin = 40;       // its margins, pixels
+constexpr int kTextSize = 44;         // its font size, pixels: about 45 characters a line
+constexpr int kTextLine = 56;         // its line pitch, pixels: 16 lines a page
+constexpr int kTextMargin = 48;       // its margins, pixels
 constexpr int kCardWidth = 1024, kCardHeight = 640;
 
 using Rgb = std::array<float, 3>;
