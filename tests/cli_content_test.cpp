@@ -79,7 +79,7 @@ TEST_F(CliContent, EpochCopiesContentAndRenderShowsTheImage) {
                                                 "\tgone.txt\nnot-a-particle\tred.png\n");
   const auto r = run_cli({"epoch", at("ring.graph").string(), "--content", at("site/side.tsv").string(), "-o", at("with").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("content            3 particles: 1 image, 0 text, 0 other; 1 missing, 0 unreadable, 1 refused; 1 entries"),
+  EXPECT_NE(r.out.find("content            3 particles: 1 image, 0 text, 0 other; 1 missing, 0 unreadable, 1 refused; 1 entry names no particle of the snapshot\n"),
             std::string::npos)
       << r.out;
   // The copy is in the epoch, listed in the manifest and the index; the refused file was not read.

@@ -8,7 +8,10 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <optional>
+#include <string>
 #include <system_error>
+#include <vector>
 
 #include "../snapshot/text_util.hpp"
 #include "r1/fixedpoint/hemera.hpp"
@@ -270,7 +273,8 @@ std::string content_summary(const ContentSet& c) {
   const auto n = [](std::size_t v) { return std::to_string(v); };
   return n(c.entries.size()) + " particle" + (c.entries.size() == 1 ? "" : "s") + ": " + n(kind[0]) + " image, " + n(kind[1]) +
          " text, " + n(kind[2]) + " other; " + n(status[1]) + " missing, " + n(status[2]) + " unreadable, " + n(status[3]) +
-         " refused" + (c.unknown ? "; " + n(c.unknown) + " entries name no particle of the snapshot" : "");
+         " refused" +
+         (c.unknown ? "; " + n(c.unknown) + (c.unknown == 1 ? " entry names" : " entries name") + " no particle of the snapshot" : "");
 }
 
 }  // namespace r1::render

@@ -5,9 +5,12 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "image.hpp"
 
@@ -59,13 +62,15 @@ std::size_t utf8_prefix(std::string_view s, std::size_t n) {
 // `s` cut (at code points) and ended with an ellipsis so that it sets within `width` pixels.
 std::string fit(std::string_view s, int size, int width) {
   if (text_width(s, size) <= width) return std::string(s);
-  std::size_t n = s.size();
-  while (n > 0) {
-    n = utf8_prefix(s, n - 1);
-    const std::string cut = std::string(s.substr(0, n)) + "\u2026";
-    if (text_width(cut, size) <= width) return cut;
+  // The longest prefix that fits with the ellipsis, by bisection over byte lengths cut back to
+  // code points (widths grow with the prefix), so a long name costs a few measurements.
+  const auto cut = [&](std::size_t n) { return std::string(s.substr(0, utf8_prefix(s, n))) + "\u2026"; };
+  std::size_t lo = 0, hi = s.size();
+  while (hi - lo > 1) {
+    const std::size_t mid = (lo + hi) / 2;
+    (text_width(cut(mid), size) <= width ? lo : hi) = mid;
   }
-  return "\u2026";
+  return cut(lo);
 }
 
 void centred(Image& im, int baseline, std::string_view text, int size, Rgb ink) {

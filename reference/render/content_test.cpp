@@ -208,9 +208,8 @@ struct OneParticle {
     EXPECT_TRUE(im.is_ok()) << im.status().message();
     return im.is_ok() ? *im : Image{};
   }
-  ContentSet content(const fs::path& dir, const std::string& path) const {
+  ContentSet content(const fs::path& dir) const {
     const auto c = read_content_side_file(dir / "side.tsv", epoch.ids);
-    (void)path;
     EXPECT_TRUE(c.is_ok()) << c.status().message();
     return c.is_ok() ? *c : ContentSet{};
   }
@@ -218,7 +217,7 @@ struct OneParticle {
 
 ContentSet side_for(const OneParticle& fr, const fs::path& dir, const std::string& path) {
   r1::test::write_file(dir / "side.tsv", r1::hemera::to_hex(fr.epoch.ids[0]) + "\t" + path + "\n");
-  return fr.content(dir, path);
+  return fr.content(dir);
 }
 
 std::array<float, 3> rgb(const Image& im, int x, int y) {
@@ -344,13 +343,28 @@ TEST(ContentFrame, EdgesEnterAnOpenedParticleAtItsSphere) {
   EXPECT_GT(differing(bare, with_edges), 0u);  // the tube is drawn outside the panel
 }
 
+TEST(ContentFrame, AnImageThatDoesNotDecodeIsTheUnreadableCard) {
+  r1::test::TempDir d;
+  r1::test::write_file(d / "x.png", "not a png");
+  ContentSet c;
+  ContentEntry e;
+  e.particle = 0, e.kind = ContentKind::kImage, e.type = "png", e.source = "x.png", e.path = d / "x.png";
+  c.entries.push_back(e);
+  const ContentScene cs = make_content_scene(c, 2);
+  ASSERT_TRUE(cs.has(0));
+  EXPECT_FALSE(cs.has(1));
+  EXPECT_TRUE(cs.panels[0].card);
+  EXPECT_EQ(cs.panels[0].texture.width, 1024);
+  EXPECT_EQ(cs.panels[0].texture.height, 640);
+}
+
 TEST(ContentFrame, OnlyT0ParticlesWithContentOpen) {
   r1::test::TempDir d;
   OneParticle fr;
   // Content for the other particle only: particle 0 stays a sphere at T0.
   write_quadrants(d / "q.png", 4, 4);
   r1::test::write_file(d / "side.tsv", r1::hemera::to_hex(fr.epoch.ids[1]) + "\tq.png\n");
-  const ContentSet c = fr.content(d.path(), "");
+  const ContentSet c = fr.content(d.path());
   FrameStats st;
   EXPECT_EQ(fr.render(&c, &st).rgba, fr.render(nullptr).rgba);
   EXPECT_EQ(st.content, 0u);
