@@ -127,6 +127,23 @@ TEST_F(CliContent, MissingContentShowsACardNotAnError) {
   EXPECT_LT(c[1], 0.05f);
 }
 
+TEST_F(CliContent, AnEpochFromAnEarlierOneHasOnlyTheContentItIsGiven) {
+  r1::test::write_file(at("site/one.tsv"), id(0) + "\tred.png\n");
+  ASSERT_EQ(run_cli({"epoch", at("ring.graph").string(), "-q", "--content", at("site/one.tsv").string(), "-o", at("first").string()})
+                .exit_code,
+            0);
+  // R1-EPO-036: --from reads the earlier epoch (content and all) and carries none of its content.
+  auto r = run_cli({"epoch", at("ring.graph").string(), "-q", "--from", at("first").string(), "-o", at("next").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(at("next/content.tsv")));
+  EXPECT_FALSE(fs::exists(at("next/content")));
+  r = run_cli({"epoch", at("ring.graph").string(), "-q", "--from", at("first").string(), "--content", at("site/one.tsv").string(), "-o",
+               at("next2").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r1::test::read_file(at("next2/content/0.png")), r1::test::read_file(at("site/red.png")));
+  EXPECT_TRUE(r1::read_epoch(at("next2")).is_ok());
+}
+
 TEST_F(CliContent, BadSideFileIsOneLineExitTwoAndWritesNothing) {
   for (const std::string& text : {std::string("# ok\n") + id(0) + " red.png\n", id(0) + "\tred.png\n" + id(0) + "\tred.png\n"}) {
     r1::test::write_file(at("site/bad.tsv"), text);
