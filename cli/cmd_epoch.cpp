@@ -39,6 +39,7 @@ struct EpochCliOptions {
   std::string overlay = "none", overlay_file;
   std::string content;  // T0 content side file (R1-EPO-030)
   bool no_role_shapes = false;
+  std::string radius_scale = "spacing";
   bool no_timings = false;
   bool field = false;
   std::uint32_t field_steps = render::NeuralConfig{}.steps;
@@ -90,6 +91,7 @@ Result<EpochOptions> epoch_options(const EpochCliOptions& c) {
   o.encoding.overlay = c.overlay;
   if (c.overlay == "custom") R1_TRY(load_custom_overlay(o.encoding, c.overlay_file));
   o.encoding.role_shapes = !c.no_role_shapes;
+  o.encoding.radius_scale = c.radius_scale;
   o.parallel = c.parallel;
   return o;
 }
@@ -118,6 +120,9 @@ void print_summary(const Epoch& e, const std::string& dir, double total_s) {
     const std::string name = e.titles[i].empty() ? hemera::to_hex(e.ids[i]).substr(0, 16) : e.titles[i];
     std::printf("  %zu. %-40.40s %.6f\n", k + 1, name.c_str(), e.focus.phi[i].to_double());
   }
+  std::printf("radius             r_0 %.6g scene units (%s)\n",
+              std::sqrt(Q32::from_raw(e.encoding.r0_squared_raw).to_double()),
+              e.encoding.radius_scale == "spacing" ? "from the layout's spacing" : "R_scene");
   std::printf("clusters           level 0: %zu, level 1: %zu, level 2: %zu, level 3: %zu\n", e.hierarchy.levels[0].size(),
               e.hierarchy.levels[1].size(), e.hierarchy.levels[2].size(), e.hierarchy.levels[3].size());
   if (e.update) {
@@ -225,6 +230,9 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_option("--overlay", c->overlay, "none (default), crystal-v5 or custom");
   cmd->add_option("--overlay-file", c->overlay_file, "TOML lookup tables for --overlay custom");
   cmd->add_option("--content", c->content, "T0 content side file: lines PARTICLE<TAB>PATH, paths under its folder");
+  cmd->add_option("--radius-scale", c->radius_scale,
+                  "r_0 from the layout's spacing (spacing, default) or r_0 = R_scene (scene)")
+      ->check(CLI::IsMember({"spacing", "scene"}));
   cmd->add_flag("--no-role-shapes", c->no_role_shapes, "all spheres instead of hub/bridge/leaf shapes");
   cmd->add_flag("--field", c->field, "also train the T-infinity neural field (field.nrf, for r1 render --field neural)");
   cmd->add_option("--field-steps", c->field_steps, "with --field: Adam steps (200)")->check(CLI::Range(1u, 1000000u));

@@ -29,7 +29,13 @@ r1::test::TempDir* CliRender::dir_ = nullptr;
 TEST_F(CliRender, TwoRendersOfTheSameViewGiveIdenticalBytes) {
   auto r = run_cli({"render", epoch().string(), "--size", "96x64", "-o", at("a.png").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("visible 150"), std::string::npos) << r.out;
+  // The default view frames the ball holding 90% of the focus (R1-RND-007): on these three blocks
+  // of nearly equal focus that is most particles, not all (144 of 150 today).
+  const auto at_visible = r.out.find("visible ");
+  ASSERT_NE(at_visible, std::string::npos) << r.out;
+  const int visible = std::stoi(r.out.substr(at_visible + 8));
+  EXPECT_GE(visible, 135) << r.out;
+  EXPECT_LE(visible, 150) << r.out;
   r = run_cli({"render", epoch().string(), "--size", "96x64", "-o", at("b.png").string(), "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r1::test::read_file(at("a.png")), r1::test::read_file(at("b.png")));

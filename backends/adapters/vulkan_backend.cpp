@@ -142,10 +142,9 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
     float f[3] = {0, 0, 0};
     host.pixel(static_cast<int>(k % static_cast<std::uint32_t>(v.width)), static_cast<int>(k / static_cast<std::uint32_t>(v.width)),
                &image.rgba[std::size_t{k} * 4], f);
-    if (f[0] != 0 || f[1] != 0 || f[2] != 0) {
-      if (flow.empty()) flow.assign(pixels * 3, 0.0f);
-      std::copy(f, f + 3, flow.begin() + static_cast<std::ptrdiff_t>(std::size_t{k} * 3));
-    }
+    // The host's flow replaces whatever the device left at this pixel, zero included.
+    if (flow.empty() && (f[0] != 0 || f[1] != 0 || f[2] != 0)) flow.assign(pixels * 3, 0.0f);
+    if (!flow.empty()) std::copy(f, f + 3, flow.begin() + static_cast<std::ptrdiff_t>(std::size_t{k} * 3));
   }
   if (!flow.empty()) image.flow = std::move(flow);
   return Status::ok();

@@ -14,9 +14,6 @@ namespace r1 {
 
 namespace {
 
-// r0^2 = R_scene^2 scene units squared: r0 sqrt(phi) = sqrt(r0^2 phi) with r0^2 phi exact.
-constexpr std::int64_t kR0Squared = kSceneRadius * kSceneRadius;
-
 // The schemaless shape of a role (R1-ENC-019).
 Shape role_shape(Role r) {
   switch (r) {
@@ -85,9 +82,11 @@ Result<std::vector<const OverlayStyle*>> resolve_particles(const Snapshot& s, co
 
 }  // namespace
 
-Q32 radius_of(Q32 phi, Q32 multiplier) {
-  // phi <= 1, so r0^2 phi <= 10^6: exact and far inside Q32; sqrt and the product round once each.
-  const Q32 base = fx::sqrt(Q32::from_raw(kR0Squared * phi.raw));
+Q32 radius_of(Q32 phi, Q32 multiplier, std::int64_t r0_squared_raw) {
+  // r0^2 phi rounds once (exact when r0^2 is an integer, as R_scene^2 is); phi <= 1 and
+  // r0^2 <= R_scene^2 keep it far inside Q32. The root and the product round once each.
+  const i128 prod = fx::detail::rne_shift(static_cast<i128>(r0_squared_raw) * phi.raw, Q32::kFracBits);
+  const Q32 base = fx::sqrt(Q32::from_raw(static_cast<std::int64_t>(prod)));
   return base * multiplier;
 }
 
@@ -196,7 +195,12 @@ Result<Encoding> encode_with_overlay(const Snapshot& snapshot, const Graph& grap
       }
     }
     e.radius.resize(n);
-    for_each_particle(n, options.parallel, [&](std::size_t p) { e.radius[p] = radius_of(focus.phi[p], multiplier[p]); });
+    const std::int64_t r0sq = options.r0_squared_raw.value_or(kSceneR0SquaredRaw);
+    if (r0sq <= 0 || r0sq > kSceneR0SquaredRaw)
+      return Status::input("encoding: r0^2 raw " + std::to_string(r0sq) + " outside (0, R_scene^2]");
+    e.radius_scale = options.r0_squared_raw ? options.radius_scale : "scene";
+    e.r0_squared_raw = r0sq;
+    for_each_particle(n, options.parallel, [&](std::size_t p) { e.radius[p] = radius_of(focus.phi[p], multiplier[p], r0sq); });
     if (info) *info = inf;
     return e;
   } catch (const std::exception& ex) {

@@ -6,6 +6,7 @@
 #include <boost/multiprecision/cpp_bin_float.hpp>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "r1/fixedpoint/counter_rng.hpp"
@@ -135,6 +136,86 @@ RC_GTEST_PROP(Radius, NonDecreasingInPhi, ()) {
   const Q32 ra = r1::radius_of(Q32::from_raw(a), m), rb = r1::radius_of(Q32::from_raw(b), m);
   const bool ordered = (a <= b) ? ra <= rb : ra >= rb;
   RC_ASSERT(ordered);
+}
+
+RC_GTEST_PROP(Radius, NonDecreasingInPhiForAnyR0, ()) {
+  const auto a = *rc::gen::inRange<std::int64_t>(1, Q32::kOneRaw + 1);
+  const auto b = *rc::gen::inRange<std::int64_t>(1, Q32::kOneRaw + 1);
+  const auto r0sq = *rc::gen::inRange<std::int64_t>(1, r1::kSceneR0SquaredRaw + 1);
+  const Q32 ra = r1::radius_of(Q32::from_raw(a), Q32::one(), r0sq), rb = r1::radius_of(Q32::from_raw(b), Q32::one(), r0sq);
+  const bool ordered = (a <= b) ? ra <= rb : ra >= rb;
+  RC_ASSERT(ordered);
+  // Correctly rounded twice: within one unit of sqrt(r0^2 phi) computed in 50 digits.
+  const Big exact = sqrt(Big(r0sq) * Big(a) / Big(4294967296.0) / Big(4294967296.0));
+  RC_ASSERT(abs(Big(ra.raw) / Big(4294967296.0) - exact) <= Big(1) / Big(4294967296.0));
+}
+
+// R1-ENC-007: particles 2 units apart on a line with equal focus: r_0^2 = (2/2)^2 / (1/n) = n,
+// so every radius is exactly 1 (half the spacing).
+TEST(RadiusScale, ClosedFormOnALine) {
+  const std::uint32_t n = 64;
+  std::vector<std::array<Q32, 3>> pos(n);
+  for (std::uint32_t i = 0; i < n; ++i) pos[i] = {Q32::from_int(2 * static_cast<std::int64_t>(i) - 64), Q32{}, Q32{}};
+  std::vector<Q32> phi(n, Q32::from_raw(Q32::kOneRaw / n));
+  const r1::RadiusScale s = r1::radius_scale_from_layout(pos, phi);
+  EXPECT_EQ(s.distinct, n);
+  EXPECT_EQ(s.spacing2, static_cast<r1::u128>(4) << 64);
+  EXPECT_EQ(s.r0_squared_raw, std::int64_t{n} << 32);
+  EXPECT_EQ(r1::radius_of(phi[0], Q32::one(), s.r0_squared_raw), Q32::one());
+  // Coincident copies change neither the spacing nor (with the same median focus) r_0.
+  std::vector<std::array<Q32, 3>> doubled = pos;
+  doubled.insert(doubled.end(), pos.begin(), pos.end());
+  std::vector<Q32> phi2(2 * n, Q32::from_raw(Q32::kOneRaw / n / 2));
+  const r1::RadiusScale d = r1::radius_scale_from_layout(doubled, phi2);
+  EXPECT_EQ(d.distinct, n);
+  EXPECT_EQ(d.spacing2, s.spacing2);
+  EXPECT_EQ(d.r0_squared_raw, std::int64_t{2 * n} << 32);  // half the focus each: r_0^2 doubles
+}
+
+TEST(RadiusScale, DegenerateLayoutsKeepRScene) {
+  std::vector<std::array<Q32, 3>> one(5, {Q32::from_int(3), Q32::from_int(-1), Q32{}});
+  std::vector<Q32> phi(5, Q32::from_raw(Q32::kOneRaw / 5));
+  EXPECT_EQ(r1::radius_scale_from_layout(one, phi).r0_squared_raw, r1::kSceneR0SquaredRaw);
+  EXPECT_EQ(r1::radius_scale_from_layout({}, {}).r0_squared_raw, r1::kSceneR0SquaredRaw);
+  // Two particles 2000 apart with all the focus on one: the rule asks for more than R_scene.
+  std::vector<std::array<Q32, 3>> two = {{Q32::from_int(-1000), Q32{}, Q32{}}, {Q32::from_int(1000), Q32{}, Q32{}}};
+  std::vector<Q32> tiny = {Q32::from_raw(1), Q32::from_raw(Q32::kOneRaw - 1)};
+  EXPECT_EQ(r1::radius_scale_from_layout(two, tiny).r0_squared_raw, r1::kSceneR0SquaredRaw);
+}
+
+// The median spacing against brute force, serial and parallel alike, on random layouts with
+// repeated positions.
+RC_GTEST_PROP(RadiusScale, MedianSpacingMatchesBruteForce, ()) {
+  const auto n = *rc::gen::inRange<std::uint32_t>(2, 200);
+  std::vector<std::array<Q32, 3>> pos(n);
+  std::vector<Q32> phi(n);
+  for (auto& p : pos)
+    for (auto& c : p) c = Q32::from_raw(*rc::gen::inRange<std::int64_t>(-40, 40) << 30);
+  for (auto& f : phi) f = Q32::from_raw(*rc::gen::inRange<std::int64_t>(1, Q32::kOneRaw / n));
+  std::vector<std::array<std::int64_t, 3>> d;
+  for (const auto& p : pos) d.push_back({p[0].raw, p[1].raw, p[2].raw});
+  std::sort(d.begin(), d.end());
+  d.erase(std::unique(d.begin(), d.end()), d.end());
+  const r1::RadiusScale s = r1::radius_scale_from_layout(pos, phi);
+  RC_ASSERT(s.distinct == d.size());
+  if (d.size() < 2) return;
+  std::vector<r1::u128> nn;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    r1::u128 best = r1::u128_max;
+    for (std::size_t j = 0; j < d.size(); ++j) {
+      if (i == j) continue;
+      r1::u128 sum = 0;
+      for (int k = 0; k < 3; ++k) {
+        const r1::i128 e = d[i][k] - d[j][k];
+        sum += static_cast<r1::u128>(e * e);
+      }
+      best = std::min(best, sum);
+    }
+    nn.push_back(best);
+  }
+  std::sort(nn.begin(), nn.end());
+  RC_ASSERT(s.spacing2 == nn[nn.size() / 2]);
+  RC_ASSERT(r1::radius_scale_from_layout(pos, phi, true).r0_squared_raw == s.r0_squared_raw);
 }
 
 TEST(Hue, KnownAngles) {

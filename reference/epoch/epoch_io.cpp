@@ -263,7 +263,10 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
                      {"rho", e.spectral_params.rho ? json(*e.spectral_params.rho) : json("auto")},
                      {"basis", e.spectral_params.basis},
                      {"tolerance", e.spectral_params.tolerance},
-                     {"overlay", e.encoding.overlay}};
+                     {"overlay", e.encoding.overlay},
+                     {"radius_scale", e.encoding.radius_scale},
+                     {"r0_squared", Q32::from_raw(e.encoding.r0_squared_raw).to_string()},
+                     {"r0_squared_raw", e.encoding.r0_squared_raw}};
   m["eigenvalues"] = e.spectrum.eigenvalues;
   m["residuals"] = e.spectrum.residuals;
   m["found"] = e.spectrum.found;
@@ -462,6 +465,10 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   a.rms = al.at("rms").get<double>();
   const json& pj = m.at("parameters");
   e.encoding.overlay = pj.at("overlay").get<std::string>();
+  if (pj.contains("radius_scale")) {  // epochs written before R1-ENC-007 used r_0 = R_scene
+    e.encoding.radius_scale = pj.at("radius_scale").get<std::string>();
+    e.encoding.r0_squared_raw = pj.at("r0_squared_raw").get<std::int64_t>();
+  }
   TriKernelParams& tk = e.trikernel;
   tk.lambda_d = q32_from(pj, "lambda_d", manifest);
   tk.lambda_s = q32_from(pj, "lambda_s", manifest);

@@ -520,6 +520,56 @@ TEST(Render, TwoRendersGiveIdenticalBytesAndEveryTierAppears) {
 
 // ---- view files ----
 
+// R1-RND-067: a label sits beside its particle's disc, never over it. A lone T1 sphere drawn with
+// and without its label: every pixel the label changes lies right of the disc, none inside it.
+TEST(Labels, NeverOverTheirOwnParticle) {
+  r1::Epoch e = make_epoch({{0, 0, 0}}, 40, r1::Shape::kSphere);
+  e.titles[0] = "WWWWWWWW label";
+  const Scene s = make_scene(e);
+  View v = lone_view({0, 0, 400}, 201);
+  const CameraFrame f = camera_frame(v);
+  const double radius_px = 40 * f.focal_px / 400;  // the disc's projected radius
+  ASSERT_GT(2 * radius_px, v.tiers.t1);         // T1: labelled
+  ASSERT_LT(2 * radius_px, v.tiers.t0);
+  auto plain = render_frame(s, v, {}, nullptr, {});
+  v.labels = true;
+  FrameStats st;
+  auto labelled = render_frame(s, v, {}, &st, {});
+  ASSERT_TRUE(plain.is_ok() && labelled.is_ok());
+  ASSERT_EQ(st.labels, 1u);
+  int changed = 0;
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) {
+      const std::size_t k = (static_cast<std::size_t>(y) * v.width + x) * 4;
+      bool same = true;
+      for (int c = 0; c < 4; ++c) same = same && plain->rgba[k + c] == labelled->rgba[k + c];
+      if (same) continue;
+      ++changed;
+      EXPECT_GT(x + 0.5, v.width / 2.0 + radius_px) << "label pixel over the disc at " << x << "," << y;
+    }
+  EXPECT_GT(changed, 20);
+}
+
+// R1-RND-007: the default distance frames the ball about the focus centroid holding 90% of the
+// focus, not the farthest particle.
+TEST(Framing, FocusExtentHoldsNinetyPercent) {
+  // Ten particles on the x axis at 0..9 with equal focus, radius 0.5, and one far outlier.
+  std::vector<Vec3> pos;
+  for (int i = 0; i < 10; ++i) pos.push_back({static_cast<double>(i), 0, 0});
+  pos.push_back({1000, 0, 0});
+  const r1::Epoch e = make_epoch(pos, 0.5, r1::Shape::kSphere);
+  const Scene s = make_scene(e);
+  std::vector<double> d;
+  for (std::uint32_t p = 0; p < s.n; ++p) d.push_back(length(s.position[p] - s.centroid) + s.radius[p]);
+  std::vector<double> sorted = d;
+  std::sort(sorted.begin(), sorted.end());
+  // 11 equal shares: 90% needs 10 of them, the outlier is the 11th.
+  EXPECT_DOUBLE_EQ(focus_extent(s, kFramedFocus), sorted[9]);
+  EXPECT_DOUBLE_EQ(focus_extent(s, 1.0), sorted[10]);
+  EXPECT_DOUBLE_EQ(scene_extent(s), sorted[10]);
+  EXPECT_DOUBLE_EQ(fit_distance(s, 50), 1.05 * sorted[9] / std::sin(25 * kPi / 180));
+}
+
 TEST(ViewFile, RoundTripsAndRefusesBadValues) {
   View v;
   v.camera.position = {1.5, -2.25, 3000};

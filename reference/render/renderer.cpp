@@ -556,7 +556,8 @@ Status draw_labels(const Scene& s, const View& v, const CameraFrame& f, const Cu
     if (op.owner[static_cast<std::size_t>(cy) * W + cx] != static_cast<std::int64_t>(vis->particle)) continue;
     const double half = std::min(vis->s, 4.0 * H) * 0.5;
     const int text_px = 14;
-    R1_TRY(draw_text(image, static_cast<int>(pr.px + half * 0.75) + 4, cy + text_px / 3, s.label[vis->particle], text_px,
+    // Beside the disc, never over it: the particle cannot hide its own label.
+    R1_TRY(draw_text(image, static_cast<int>(pr.px + half) + 4, cy + text_px / 3, s.label[vis->particle], text_px,
                      {0.85f, 0.85f, 0.85f}));
     ++st.labels;
   }

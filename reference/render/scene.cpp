@@ -102,8 +102,26 @@ double scene_extent(const Scene& s) {
   return fit;
 }
 
+double focus_extent(const Scene& s, double share) {
+  // Particles by |X' - c| + r, ties by index; the first distance at which the running sum of
+  // phi reaches `share` of the whole.
+  std::vector<std::pair<double, std::uint32_t>> by(s.n);
+  double total = 0;
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    by[p] = {length(s.position[p] - s.centroid) + s.radius[p], p};
+    total += s.phi[p];
+  }
+  std::sort(by.begin(), by.end());
+  double held = 0;
+  for (const auto& [d, p] : by) {
+    held += s.phi[p];
+    if (held >= share * total) return d;
+  }
+  return by.empty() ? 0.0 : by.back().first;
+}
+
 double fit_distance(const Scene& s, double fov_deg) {
-  return 1.05 * std::max(1.0, scene_extent(s)) / std::sin(fov_deg * kPi / 360.0);
+  return 1.05 * std::max(1.0, focus_extent(s, kFramedFocus)) / std::sin(fov_deg * kPi / 360.0);
 }
 
 }  // namespace r1::render

@@ -70,8 +70,15 @@ void for_each_member(const Scene& s, int level, std::uint32_t id, Fn&& fn) {
 // every particle.
 double scene_extent(const Scene& s);
 
-// R1-RND-007: the camera distance from the focus centroid at which every particle's bounding
-// sphere fits the vertical field of view `fov_deg`, with 5% margin (the default orbit radius).
+// The share of the focus the default views frame (R1-RND-007).
+inline constexpr double kFramedFocus = 0.9;
+
+// The radius of the smallest ball about the focus centroid whose particles (|X'(p) - c| + r(p)
+// within it) hold `share` of the focus.
+double focus_extent(const Scene& s, double share);
+
+// R1-RND-007: the camera distance from the focus centroid at which the ball holding 90% of the
+// focus fits the vertical field of view `fov_deg`, with 5% margin (the default orbit radius).
 double fit_distance(const Scene& s, double fov_deg);
 
 }  // namespace r1::render

@@ -403,9 +403,9 @@ uniform float uTime;    // seconds, for the edge flow
 vec4 project(vec3 c) { return vec4(c.x * uFocal * 2.0 / uViewport.x, c.y * uFocal * 2.0 / uViewport.y, 0.0, -c.z); }
 vec2 pixel(vec3 c) { return c.xy / -c.z * uFocal; }
 `;
-  // Particles: pass 0 draws T0..T2 as ray-cast spheres (R1-RND-061's headlight), pass 1 T3 as EWA
-  // Gaussian splats (R1-RND-040..045), pass 2 T-infinity as the field's kernels, each a column of
-  // optical depth kappa sqrt(2 pi) w exp(-d^2 / 2 sigma^2) (R1-RND-051..053).
+  // Particles: pass 0 draws T0..T2 as ray-cast shapes (R1-RND-061's headlight); pass 1 the T3
+  // EWA Gaussian splats (R1-RND-040..045) and the T-infinity field's kernels, each a column of
+  // optical depth kappa sqrt(2 pi) w exp(-d^2 / 2 sigma^2) (R1-RND-051..053), in one stream.
   const particleVs = common + `
 layout(location = 0) in vec2 aCorner;
 layout(location = 1) in vec3 aCenter;
@@ -414,15 +414,34 @@ layout(location = 3) in vec3 aColor;
 layout(location = 4) in float aNphi;
 layout(location = 5) in float aShape;
 uniform int uPass;
+uniform int uField;     // 1: draw the T-infinity kernels
 out vec3 vCenter; out vec3 vPoint; out vec3 vColor; out float vRadius; out vec3 vConic; out float vWeight;
+out vec3 vConicF; out float vWeightF;
 flat out int vShape;
+// EWA (R1-RND-041): the screen conic of a Gaussian of width sigma at camera-space c, plus a
+// low-pass of extra px^2; h is the half extent in scene units that holds reach sigmas.
+vec3 screenConic(vec3 c, float sigma, float extra, float reach, out float h) {
+  float d = -c.z, fz = uFocal / d, xs = c.x / d, ys = c.y / d;
+  float s2 = sigma * sigma * fz * fz;
+  float c00 = s2 * (1.0 + xs * xs) + extra, c11 = s2 * (1.0 + ys * ys) + extra, c01 = s2 * xs * ys;
+  float det = c00 * c11 - c01 * c01;
+  h = reach * sqrt(max(c00, c11) + abs(c01)) / fz;
+  return vec3(c11, -c01, c00) / det;
+}
 void main() {
   vec3 c = uView * (aCenter - uEye);
   float d = -c.z;
   float s = d > aRadius + 1e-3 ? 2.0 * aRadius * uFocal / d : 1e30;
   float winf = clamp((uTiers.x + uBand - s) / (2.0 * uBand), 0.0, 1.0);
-  bool draw = d > 1e-3 && (uPass == 0 ? s > uTiers.y : (uPass == 1 ? (s > uTiers.x - uBand && s <= uTiers.y) : s <= uTiers.x + uBand));
+  // Pass 0: T0..T2 shapes. Pass 1: everything translucent in one far-to-near stream, so that a
+  // splat inside a cloud of field kernels is covered by the kernels in front of it as the
+  // reference's ray march covers it (R1-RND-070): T3 splats and T-infinity kernels, a particle in
+  // the handoff band being both.
+  bool draw = d > 1e-3 && (uPass == 0 ? s > uTiers.y : s <= uTiers.y);
   if (uPass == 0 && d <= aRadius) draw = false;
+  vWeight = s > uTiers.x - uBand ? 0.9 * (1.0 - winf) : 0.0;
+  vWeightF = uField == 1 ? 0.25 * 2.5066283 * aNphi * winf : 0.0;
+  if (uPass == 1 && !(vWeight > 0.0 || vWeightF > 0.0)) draw = false;
   if (!draw) { gl_Position = vec4(2.0, 2.0, 2.0, 1.0); return; }
   vCenter = c; vColor = aColor; vRadius = aRadius; vShape = int(aShape + 0.5);
   float L = length(c);
@@ -430,25 +449,16 @@ void main() {
   vec3 side = abs(fw.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
   vec3 right = normalize(cross(fw, side));
   vec3 up = cross(right, fw);
-  float h;
+  float h = 0.0;
   if (uPass == 0) {
     h = aRadius * L / sqrt(L * L - aRadius * aRadius) * 1.02;   // the tangent cone's section
   } else {
-    float sigma, extra;
-    if (uPass == 1) {
-      sigma = 0.5 * aRadius; extra = 0.3; vWeight = 0.9 * (1.0 - winf);
-    } else {
-      sigma = max(sqrt(uTau * d / uTfar), 0.5 * d / uFocal); extra = 0.0; vWeight = 0.25 * 2.5066283 * aNphi * winf;
-    }
-    // EWA: Sigma' = sigma^2 J J^T (+ the low-pass), J the projection's Jacobian at the centre.
-    float fz = uFocal / d, xs = c.x / d, ys = c.y / d;
-    float s2 = sigma * sigma * fz * fz;
-    float c00 = s2 * (1.0 + xs * xs) + extra, c11 = s2 * (1.0 + ys * ys) + extra, c01 = s2 * xs * ys;
-    float det = c00 * c11 - c01 * c01;
-    vConic = vec3(c11, -c01, c00) / det;
     // Splats reach alpha 1/255 (R1-RND-043) within 3.2 sigma; the field's kernels count to 4 sigma
     // (R1-RND-054's cutoff), where many faint tails add up.
-    h = (uPass == 1 ? 3.2 : 4.0) * sqrt(max(c00, c11) + abs(c01)) / fz;
+    float hs = 0.0, hf = 0.0;
+    if (vWeight > 0.0) vConic = screenConic(c, 0.5 * aRadius, 0.3, 3.2, hs);
+    if (vWeightF > 0.0) vConicF = screenConic(c, max(sqrt(uTau * d / uTfar), 0.5 * d / uFocal), 0.0, 4.0, hf);
+    h = max(hs, hf);
   }
   vPoint = c + (right * aCorner.x + up * aCorner.y) * h;
   gl_Position = project(vPoint);
@@ -538,9 +548,11 @@ bool hitShape(int shape, vec3 o, vec3 d, float r, out float t, out vec3 n) {
 }`;
   const particleFs = common + shapesGlsl + `
 in vec3 vCenter; in vec3 vPoint; in vec3 vColor; in float vRadius; in vec3 vConic; in float vWeight;
+in vec3 vConicF; in float vWeightF;
 flat in int vShape;
 uniform int uPass;
 out vec4 outColor;
+float conicQ(vec3 k, vec2 dd) { return k.x * dd.x * dd.x + 2.0 * k.y * dd.x * dd.y + k.z * dd.y * dd.y; }
 void main() {
   vec3 dir = normalize(vPoint);
   if (uPass == 0) {
@@ -554,9 +566,12 @@ void main() {
     return;
   }
   vec2 dd = pixel(vPoint) - pixel(vCenter);
-  float q = vConic.x * dd.x * dd.x + 2.0 * vConic.y * dd.x * dd.y + vConic.z * dd.y * dd.y;
-  float a = uPass == 1 ? min(0.99, vWeight * exp(-0.5 * q)) : 1.0 - exp(-vWeight * exp(-0.5 * q));
-  if (uPass == 1 ? a < 1.0 / 255.0 : !(a > 0.0)) discard;
+  float as = vWeight > 0.0 ? min(0.99, vWeight * exp(-0.5 * conicQ(vConic, dd))) : 0.0;
+  if (as < 1.0 / 255.0) as = 0.0;
+  float af = vWeightF > 0.0 ? 1.0 - exp(-vWeightF * exp(-0.5 * conicQ(vConicF, dd))) : 0.0;
+  // The splat over the kernel: one colour, so their alphas combine.
+  float a = 1.0 - (1.0 - as) * (1.0 - af);
+  if (!(a > 0.0)) discard;
   outColor = vec4(vColor * a, a);
   gl_FragDepth = -vCenter.z / ${FAR.toFixed(1)};
 }`;
@@ -772,12 +787,12 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     const pass = gl.getUniformLocation(G.particle, 'uPass');
     gl.uniform1i(pass, 0);
     gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount);
-    // The field, then the splats: premultiplied "over", far to near, depth-tested against the
-    // opaque layer (R1-RND-070).
+    // Splats and field kernels in one stream: premultiplied "over", far to near, depth-tested
+    // against the opaque layer (R1-RND-070).
     gl.enable(gl.BLEND);
     gl.blendFunc(gl.ONE, gl.ONE_MINUS_SRC_ALPHA);
     gl.depthMask(false);
-    if (S.showField) { gl.uniform1i(pass, 2); gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount); }
+    gl.uniform1i(gl.getUniformLocation(G.particle, 'uField'), S.showField ? 1 : 0);
     gl.uniform1i(pass, 1);
     gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount);
     gl.disable(gl.BLEND);
@@ -796,19 +811,46 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
   function drawLabels(c, f, cls) {
     ctx2d.clearRect(0, 0, overlay.width, overlay.height);
     if (!S.showLabels) return 0;
-    const t1 = S.meta.tiers.t1, labelled = [];
-    for (let p = 0; p < S.n; ++p) {
-      if (!(cls.size[p] > t1)) continue;
+    const t1 = S.meta.tiers.t1, t2 = S.meta.tiers.t2, labelled = [], discs = [];
+    const project = (p) => {
       const rel = sub(P(p), c.position), d = dot(rel, f.forward);
-      labelled.push({ p, d, px: S.width / 2 + dot(rel, f.right) / d * f.focal, py: S.height / 2 - dot(rel, f.up) / d * f.focal,
-                      rp: S.radius[p] * f.focal / d });
+      return { p, d, px: S.width / 2 + dot(rel, f.right) / d * f.focal, py: S.height / 2 - dot(rel, f.up) / d * f.focal,
+               rp: S.radius[p] * f.focal / d };
+    };
+    for (let p = 0; p < S.n; ++p) {
+      if (!(cls.size[p] > t2)) continue;
+      const q = project(p);
+      if (!(q.d > 1e-3)) continue;
+      discs.push(q);
+      if (cls.size[p] > t1) labelled.push(q);
     }
-    labelled.sort((a, b) => b.d - a.d || a.p - b.p);   // far to near
-    const shown = labelled.slice(Math.max(0, labelled.length - 400));
+    // A label shows only where its particle is the nearest shape at its centre (R1-RND-067):
+    // the discs of the shapes, bucketed in 64-pixel cells, stand for their surfaces.
+    const cell = 64, gw = Math.ceil(S.width / cell), gh = Math.ceil(S.height / cell), grid = new Map();
+    for (const q of discs) {
+      const x0 = Math.max(0, Math.floor((q.px - q.rp) / cell)), x1 = Math.min(gw - 1, Math.floor((q.px + q.rp) / cell));
+      const y0 = Math.max(0, Math.floor((q.py - q.rp) / cell)), y1 = Math.min(gh - 1, Math.floor((q.py + q.rp) / cell));
+      for (let y = y0; y <= y1; ++y) for (let x = x0; x <= x1; ++x) {
+        const k = y * gw + x;
+        if (!grid.has(k)) grid.set(k, []);
+        grid.get(k).push(q);
+      }
+    }
+    const hidden = (l) => {
+      const gx = Math.floor(l.px / cell), gy = Math.floor(l.py / cell);
+      if (gx < 0 || gy < 0 || gx >= gw || gy >= gh) return true;
+      for (const q of grid.get(gy * gw + gx) || [])
+        if ((q.d < l.d || (q.d === l.d && q.p < l.p)) && Math.hypot(q.px - l.px, q.py - l.py) < q.rp) return true;
+      return false;
+    };
+    const visible = labelled.filter((l) => !hidden(l));
+    visible.sort((a, b) => b.d - a.d || a.p - b.p);   // far to near
+    const shown = visible.slice(Math.max(0, visible.length - 400));
     ctx2d.font = '14px "DejaVu Sans", sans-serif';
     ctx2d.fillStyle = '#d0d0d0';
     ctx2d.textBaseline = 'middle';
-    for (const l of shown) ctx2d.fillText(S.labels[l.p] || '', l.px + 0.75 * l.rp + 4, l.py);
+    // Beside the disc, never over it (R1-RND-067).
+    for (const l of shown) ctx2d.fillText(S.labels[l.p] || '', l.px + l.rp + 4, l.py);
     return shown.length;
   }
 

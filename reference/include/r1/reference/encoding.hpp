@@ -33,8 +33,22 @@ Rgb8 hsl_to_srgb8(Q32 hue_sixths, Q32 saturation, std::uint32_t lightness_permil
 
 // ---- schemaless fields (R1-ENC-001..004) --------------------------------------------------------
 
-// r0 sqrt(phi) x multiplier, r0 = R_scene (R1-ENC-001).
-Q32 radius_of(Q32 phi, Q32 multiplier = Q32::one());
+// r_0^2 = R_scene^2 as a Q32 raw: R-1.0's scene-scale constant as r1 fixed it before R1-ENC-007.
+inline constexpr std::int64_t kSceneR0SquaredRaw = kSceneRadius * kSceneRadius * (std::int64_t{1} << 32);
+
+// r_0 sqrt(phi) x multiplier (R1-ENC-001), r_0^2 given as a Q32 raw (> 0, at most R_scene^2).
+Q32 radius_of(Q32 phi, Q32 multiplier = Q32::one(), std::int64_t r0_squared_raw = kSceneR0SquaredRaw);
+
+// r_0 from the layout (R1-ENC-007): the median particle's radius half the median spacing between
+// distinct positions.
+struct RadiusScale {
+  std::int64_t r0_squared_raw = kSceneR0SquaredRaw;
+  std::uint64_t distinct = 0;  // distinct positions
+  u128 spacing2 = 0;           // the median squared spacing, exact (Q64: units of 2^-64 scene units squared)
+  std::int64_t median_phi_raw = 0;
+};
+RadiusScale radius_scale_from_layout(std::span<const std::array<Q32, 3>> position, std::span<const Q32> phi,
+                                     bool parallel = false);
 // L0 phi apportioned so the raws sum to exactly L0's raw (R1-ENC-002); `phi` must sum to 2^32.
 std::vector<Q32> apportion_luminosity(std::span<const Q32> phi, Q32 total = Q32::one());
 // The angle of (u5, u6) in turns, [0, 1) (R1-ENC-003).

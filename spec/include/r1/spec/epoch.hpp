@@ -122,6 +122,8 @@ struct Encoding {
   std::vector<Shape> shape;
   std::vector<std::array<std::uint8_t, 3>> color;  // display sRGB, 8 bits per channel
   std::string overlay = "none";                // none | crystal-v5 | custom
+  std::string radius_scale = "scene";          // how r_0 was chosen: spacing | scene (R1-ENC-007..008)
+  std::int64_t r0_squared_raw = kSceneRadius * kSceneRadius * (std::int64_t{1} << 32);  // r_0^2, Q32 raw
   // b(p) of R1-ENC-012..014 behind the roles (empty when role shapes are off): an incremental
   // epoch carries it instead of computing it again (R1-INC-037).
   std::vector<double> betweenness;
