@@ -1,5 +1,5 @@
-// r1 epoch SNAPSHOT [--backend NAME] -o DIR: the canonical epoch, through the chosen backend's
-// stages, and its summary (R1-EPO-001..013, R1-BKD-016).
+// r1 epoch SNAPSHOT [--backend NAME] [--content SIDE] -o DIR: the canonical epoch, through the chosen
+// backend's stages, with its T0 content, and its summary (R1-EPO-001..013, R1-EPO-030..036, R1-BKD-016).
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -17,6 +17,7 @@
 #include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/incremental.hpp"
+#include "render/content.hpp"
 #include "render/neural_field.hpp"
 #include "render/scene.hpp"
 
@@ -36,6 +37,7 @@ struct EpochCliOptions {
   std::optional<double> tolerance;
   std::string anchor;
   std::string overlay = "none", overlay_file;
+  std::string content;  // T0 content side file (R1-EPO-030)
   bool no_role_shapes = false;
   std::string radius_scale = "spacing";
   bool no_timings = false;
@@ -155,6 +157,11 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   const auto t0 = std::chrono::steady_clock::now();
   R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
   R1_ASSIGN(const Snapshot s, read_snapshot(c.snapshot, ro));
+  // T0 content (R1-EPO-030..033): read before the stages, so a bad side file costs no solve.
+  std::optional<render::ContentSet> content;
+  if (!c.content.empty()) {
+    R1_ASSIGN(content, render::read_content_side_file(c.content, s.particles));
+  }
   R1_ASSIGN(const Graph g, build_graph(s, progress.sink()));
   const double read_s = seconds_since(t0);
   Epoch e;
@@ -186,12 +193,15 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     wo.extra.emplace_back("field.nrf", render::encode_neural_field(f, e.snapshot_digest));
     e.timings.push_back({"field", seconds_since(t3)});
   }
+  if (content)
+    for (auto& f : render::content_epoch_files(*content)) wo.extra.push_back(std::move(f));
   const auto t2 = std::chrono::steady_clock::now();
   wo.timings = !c.no_timings;
   R1_TRY(write_epoch(e, c.out, wo));
   e.timings.push_back({"write", seconds_since(t2)});
   progress.finish();
   if (!c.quiet) print_summary(e, c.out, seconds_since(t0));
+  if (!c.quiet && content) std::printf("content            %s\n", render::content_summary(*content).c_str());
   return Status::ok();
 }
 
@@ -219,6 +229,7 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_option("--anchor", c->anchor, "anchor file of an earlier epoch: align to it (Procrustes)");
   cmd->add_option("--overlay", c->overlay, "none (default), crystal-v5 or custom");
   cmd->add_option("--overlay-file", c->overlay_file, "TOML lookup tables for --overlay custom");
+  cmd->add_option("--content", c->content, "T0 content side file: lines PARTICLE<TAB>PATH, paths under its folder");
   cmd->add_option("--radius-scale", c->radius_scale,
                   "r_0 from the layout's spacing (spacing, default) or r_0 = R_scene (scene)")
       ->check(CLI::IsMember({"spacing", "scene"}));

@@ -17,6 +17,7 @@
 #include "r1/reference/input_file.hpp"
 #include "render/legibility.hpp"
 #include "render/navigation.hpp"
+#include "render/content_pass.hpp"
 #include "render/neural_field.hpp"
 #include "render/renderer.hpp"
 #include "timing.hpp"
@@ -107,6 +108,7 @@ void print_stats(const fs::path& path, const render::View& v, const render::Fram
               static_cast<unsigned long long>(st.labels));
   std::printf("  time %.2f s: cull %.3f, T1/T2 impostors %.2f, edges %.2f, T3 splats %.2f, Tinf field %.2f, labels %.3f\n", st.total_s,
               st.cull_s, st.impostor_s, st.edge_s, st.splat_s, st.field_s, st.label_s);
+  if (st.content > 0) std::printf("  T0 content: %llu particle%s opened\n", static_cast<unsigned long long>(st.content), st.content == 1 ? "" : "s");
   if (st.host_pixels > 0)
     std::printf("  the backend's field pass left %llu pixels (%.2f%%) to the host\n", static_cast<unsigned long long>(st.host_pixels),
                 100.0 * static_cast<double>(st.host_pixels) / (static_cast<double>(v.width) * v.height));
@@ -203,6 +205,14 @@ Status run_render(const RenderCliOptions& c) {
     R1_ASSIGN(neural, render::decode_neural_field(in->text(), path, e.snapshot_digest));
     scene.neural = &neural;
   }
+  // T0 content comes with the epoch (R1-RND-136): drawn by the reference renderer's content pass;
+  // another backend draws a T0 particle as T1 and says so.
+  R1_ASSIGN(const render::ContentSet content, render::read_epoch_content(c.dir, e.ids.size()));
+  const render::ContentScene content_scene = render::make_content_scene(content, scene.n);
+  const bool use_content = !content.entries.empty() && chosen.name == "reference";
+  if (use_content) scene.content = &content_scene;
+  if (!content.entries.empty() && !use_content && !c.quiet)
+    std::printf("note: --backend %s does not draw T0 content; T0 particles are drawn as T1\n", chosen.name.c_str());
 
   render::View base;
   if (!c.view_file.empty()) {
@@ -251,7 +261,7 @@ Status run_render(const RenderCliOptions& c) {
     const ProgressFn rows = [&](std::string_view, std::uint64_t d, std::uint64_t t) {
       if (sink) sink(stage, d, t);
     };
-    Result<render::Image> frame = use_neural ? render::render_frame(scene, views[k], {}, &st, rows)
+    Result<render::Image> frame = use_neural || use_content ? render::render_frame(scene, views[k], {}, &st, rows)
                                              : chosen.backend->render(e, views[k], {}, &st, rows);
     R1_ASSIGN(render::Image img, std::move(frame));
     images.push_back(std::move(img));

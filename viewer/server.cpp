@@ -1,4 +1,4 @@
-// `r1 view`'s server (see server.hpp; spec/viewer.md R1-VIEW-001..015).
+// `r1 view`'s server (see server.hpp; spec/viewer.md R1-VIEW-001..015, R1-VIEW-070..072).
 #include "server.hpp"
 
 #include <httplib.h>
@@ -13,6 +13,7 @@
 
 #include "r1/format/bytes.hpp"
 #include "r1/reference/epoch_io.hpp"
+#include "render/content.hpp"
 #include "render/image.hpp"
 #include "render/navigation.hpp"
 #include "render/scene.hpp"
@@ -28,8 +29,30 @@ const std::string* Bundle::array(std::string_view name) const {
   return nullptr;
 }
 
+const Bundle::Content* Bundle::content_file(std::string_view name) const {
+  for (const Content& c : content)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
 namespace {
 
+// The media type a content file is served as (R1-VIEW-071): images a browser shows by their
+// type, text as UTF-8 plain text, everything else as bytes.
+std::string media_type(const render::ContentEntry& e) {
+  if (e.kind == render::ContentKind::kText) return "text/plain; charset=utf-8";
+  if (e.kind == render::ContentKind::kImage) {
+    if (e.type == "png") return "image/png";
+    if (e.type == "jpg" || e.type == "jpeg") return "image/jpeg";
+    if (e.type == "gif") return "image/gif";
+    if (e.type == "webp") return "image/webp";
+    if (e.type == "bmp") return "image/bmp";
+  }
+  return "application/octet-stream";
+}
+
+// Whether the page can show the file itself (an <img> or text), else it shows a card.
+bool browser_shows(const std::string& media) { return media != "application/octet-stream"; }
 
 nlohmann::json vec(const render::Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 
@@ -83,6 +106,30 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
     format::put_f64(weights, Q32::from_raw(edge.w_raw).to_double());
     format::put_f64(a2, Q32::from_raw(edge.a2_raw).to_double());
   }
+  // T0 content (R1-VIEW-070): read with the epoch (checked against content.tsv), served from memory.
+  R1_ASSIGN(const render::ContentSet content, render::read_epoch_content(dir, e.ids.size()));
+  nlohmann::json content_meta = nlohmann::json::array();
+  for (const render::ContentEntry& c : content.entries) {
+    const bool ok = c.status == render::ContentStatus::kOk;
+    nlohmann::json j = {{"particle", c.particle},
+                        {"status", render::content_status_name(c.status)},
+                        {"kind", ok ? render::content_kind_name(c.kind) : "card"},
+                        {"type", c.type},
+                        {"source", c.source},
+                        {"reason", c.reason},
+                        {"url", nullptr},
+                        {"bytes", c.bytes.size()}};
+    if (ok) {
+      const std::string media = media_type(c);
+      // The page shows images and text itself; other files (and images a browser cannot show, such
+      // as EXR) get a card naming the type, and a link only for what the browser can show.
+      if (c.kind != render::ContentKind::kOther && !browser_shows(media)) j["kind"] = "other";
+      const std::string name = c.file.substr(std::string("content/").size());
+      j["url"] = "data/" + std::to_string(generation) + "/" + c.file;
+      b->content.push_back({name, c.bytes, media});
+    }
+    content_meta.push_back(std::move(j));
+  }
   b->ids = e.ids;
   b->titles = e.titles;
   b->phi = s.phi;
@@ -128,6 +175,7 @@ Result<std::shared_ptr<const Bundle>> make_bundle(const fs::path& dir, std::uint
       {"background", {bg[0], bg[1], bg[2]}},
       {"hierarchy_levels", level_counts},
       {"arrays", nlohmann::json::array()},
+      {"content", std::move(content_meta)},
   };
   for (const auto& [name, bytes] : b->arrays) m["arrays"].push_back({{"name", name}, {"bytes", bytes.size()}});
   b->meta = m.dump(1);
@@ -237,6 +285,20 @@ struct Server::Impl {
         return;
       }
       res.set_content(*bytes, req.matches[2].str().ends_with(".txt") ? "text/plain; charset=utf-8" : "application/octet-stream");
+    });
+    // /data/GENERATION/content/K[.ext]: a content file the epoch's content.tsv lists (R1-VIEW-071),
+    // from memory; the name pattern admits no separators, and only listed names are found.
+    http.Get(R"(/data/([0-9]{1,19})/content/([0-9]{1,10}(\.[a-z0-9]{1,16})?))", [this](const httplib::Request& req, httplib::Response& res) {
+      const auto b = bundle(std::stoull(req.matches[1].str()));
+      const Bundle::Content* c = b ? b->content_file(req.matches[2].str()) : nullptr;
+      if (!c) {
+        res.status = 404;
+        res.set_content("no such content in this generation\n", "text/plain");
+        return;
+      }
+      // Content is data, never a document that runs: a sandbox with nothing allowed.
+      res.set_header("Content-Security-Policy", "sandbox; default-src 'none'");
+      res.set_content(c->bytes, c->media_type);
     });
     // /find?q=QUERY: the particle a warp query names (R1-VIEW-020), in the current generation.
     http.Get("/find", [this](const httplib::Request& req, httplib::Response& res) {

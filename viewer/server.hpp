@@ -26,7 +26,14 @@ struct Bundle {
   std::vector<hemera::Digest> ids;
   std::vector<std::string> titles;
   std::vector<double> phi;
+  // T0 content (R1-VIEW-070): the epoch's readable content files by their name under content/
+  // ("K.png"), with the media type they are served as.
+  struct Content {
+    std::string name, bytes, media_type;
+  };
+  std::vector<Content> content;
   const std::string* array(std::string_view name) const;
+  const Content* content_file(std::string_view name) const;
 };
 
 // Reads the epoch at `dir` and makes its bundle; `previous` (may be null) gives prev.u32, each

@@ -177,6 +177,56 @@ TEST_F(ViewerServer, NothingOutsideWhatItServes) {
   EXPECT_EQ(ok->status, 200);
 }
 
+// T0 content (R1-VIEW-070..072): meta.json lists every entry of the epoch's content.tsv, the
+// server serves the listed copies with their media type and nothing else under content/.
+TEST_F(ViewerServer, ServesTheListedContentOnly) {
+  auto e = r1::read_epoch(epoch());
+  ASSERT_TRUE(e.is_ok()) << e.status().message();
+  const fs::path site = (*dir_) / "site";
+  fs::create_directories(site);
+  const std::string png("\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00"
+                        "\x00\x00\x1f\x15\xc4\x89\x00\x00\x00\x0d\x49\x44\x41\x54\x78\xda\x63\xfc\xcf\xc0\x50\x0f\x00\x04\x85\x01\x80"
+                        "\x84\xa9\x8c\x21\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+                        67);
+  r1::test::write_file(site / "dot.png", png);
+  r1::test::write_file(site / "note.txt", "<script>alert(1)</script>\n");
+  r1::test::write_file(site / "side.tsv", r1::hemera::to_hex(e->ids[3]) + "\tdot.png\n" + r1::hemera::to_hex(e->ids[5]) +
+                                              "\tnote.txt\n" + r1::hemera::to_hex(e->ids[7]) + "\t../ring.graph\n");
+  const fs::path with = (*dir_) / "with-content";
+  const auto made = run_cli({"epoch", ((*dir_) / "ring.graph").string(), "-q", "--content", (site / "side.tsv").string(), "-o",
+                             with.string()});
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  serve(options(with));
+  const nlohmann::json m = meta();
+  ASSERT_EQ(m["content"].size(), 3u);
+  EXPECT_EQ(m["content"][0]["particle"], 3);
+  EXPECT_EQ(m["content"][0]["kind"], "image");
+  EXPECT_EQ(m["content"][0]["url"], "data/1/content/3.png");
+  EXPECT_EQ(m["content"][1]["kind"], "text");
+  EXPECT_EQ(m["content"][2]["status"], "refused");
+  EXPECT_TRUE(m["content"][2]["url"].is_null());
+  auto img = client_->Get("/data/1/content/3.png");
+  ASSERT_TRUE(img);
+  EXPECT_EQ(img->status, 200);
+  EXPECT_EQ(img->body, png);
+  EXPECT_EQ(img->get_header_value("Content-Type"), "image/png");
+  EXPECT_NE(img->get_header_value("Content-Security-Policy").find("sandbox"), std::string::npos);
+  auto txt = client_->Get("/data/1/content/5.txt");
+  ASSERT_TRUE(txt);
+  EXPECT_EQ(txt->status, 200);
+  EXPECT_EQ(txt->get_header_value("Content-Type"), "text/plain; charset=utf-8");
+  EXPECT_EQ(txt->body, "<script>alert(1)</script>\n");
+  // Unlisted names, the refused file, other generations, the index itself and climbs: 404.
+  for (const std::string path : {"/data/1/content/4.png", "/data/1/content/3.txt", "/data/1/content/7.graph", "/data/1/content/7",
+                                 "/data/2/content/3.png", "/data/1/content.tsv", "/data/1/content/../manifest.json",
+                                 "/data/1/content/%2e%2e/manifest.json", "/data/1/content/3.png/..", "/content/3.png",
+                                 "/data/1/content/", "/data/1/content/3.png%00"}) {
+    auto r = client_->Get(path);
+    ASSERT_TRUE(r) << path;
+    EXPECT_EQ(r->status, 404) << path;
+  }
+}
+
 TEST_F(ViewerServer, BusyPortAndBadEpochAreOneLineErrors) {
   serve(options(epoch()));
   auto o = options(epoch());

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -57,6 +58,18 @@ Status AtomicDirectory::open() {
 
 Status AtomicDirectory::write(const std::string& name, std::string_view bytes) {
   const fs::path p = temp_ / name;
+  // A name with folders (an epoch's content/K.ext, R1-EPO-031) gets them made inside the
+  // temporary directory, each flushed at commit so its entries are as durable as the files.
+  const fs::path rel = fs::path(name).lexically_normal();
+  if (rel.is_absolute() || rel.empty() || *rel.begin() == "..")
+    return Status::internal((target_ / name).string() + ": file name leaves the output directory");
+  if (rel.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(temp_ / rel.parent_path(), ec);
+    if (ec) return Status::output((target_ / rel.parent_path()).string() + ": cannot create: " + ec.message());
+    for (fs::path d = rel.parent_path(); !d.empty(); d = d.parent_path())
+      if (std::find(subdirs_.begin(), subdirs_.end(), d) == subdirs_.end()) subdirs_.push_back(d);
+  }
   const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return Status::output((target_ / name).string() + ": cannot create: " + std::strerror(errno));
   std::size_t done = 0;
@@ -75,6 +88,7 @@ Status AtomicDirectory::write(const std::string& name, std::string_view bytes) {
 }
 
 Status AtomicDirectory::commit() {
+  for (const fs::path& d : subdirs_) R1_TRY(fsync_path(temp_ / d, (target_ / d).string()));
   R1_TRY(fsync_path(temp_, target_.string()));
   std::error_code ec;
   if (fs::exists(target_, ec)) {

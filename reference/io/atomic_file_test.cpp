@@ -1,5 +1,6 @@
 // Atomic outputs: all or nothing (R1-ERR-003).
 #include "r1/reference/atomic_file.hpp"
+#include "r1/reference/atomic_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -46,3 +47,23 @@ TEST(AtomicFile, MissingDirectoryAndDirectoryTargetAreErrors) {
 }
 
 }  // namespace
+
+TEST(AtomicDirectory, NamesWithFoldersAppearWithTheDirectory) {
+  r1::test::TempDir d;
+  {
+    r1::AtomicDirectory out(d / "ep", [](const fs::path&) { return false; });
+    ASSERT_TRUE(out.open().is_ok());
+    ASSERT_TRUE(out.write("content/3.png", "png").is_ok());
+    ASSERT_TRUE(out.write("content/deep/4.txt", "txt").is_ok());
+    ASSERT_TRUE(out.write("a.bin", "a").is_ok());
+    // A name that climbs out of the directory is refused, not written beside it.
+    EXPECT_FALSE(out.write("../escape.txt", "x").is_ok());
+    EXPECT_FALSE(out.write("/tmp/escape.txt", "x").is_ok());
+    EXPECT_FALSE(fs::exists(d / "ep"));
+    ASSERT_TRUE(out.commit().is_ok());
+  }
+  EXPECT_EQ(r1::test::read_file(d / "ep" / "content" / "3.png"), "png");
+  EXPECT_EQ(r1::test::read_file(d / "ep" / "content" / "deep" / "4.txt"), "txt");
+  EXPECT_FALSE(fs::exists(d / "escape.txt"));
+  EXPECT_EQ(entries(d.path()), 1u);
+}

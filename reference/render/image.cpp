@@ -351,6 +351,10 @@ Status write_image(const Image& image, const fs::path& path, std::array<float, 3
   return write_atomically(path, ext, spec, OIIO::TypeDesc::FLOAT, pixels.data());
 }
 
+// DejaVu Sans by name (OIIO searches its font directories, /usr/share/fonts among them), then
+// by the Debian path: the same glyphs everywhere fonts-dejavu-core is installed.
+static const char* const kFonts[] = {"DejaVuSans", "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"};
+
 Status draw_text(Image& image, int x, int y, std::string_view text, int size, std::array<float, 3> rgb) {
   R1_TRY(check_image(image));
   if (size <= 0) return Status::input("label size must be positive, got " + std::to_string(size));
@@ -361,9 +365,6 @@ Status draw_text(Image& image, int x, int y, std::string_view text, int size, st
   // colour this is premultiplied "over" of an opaque glyph with coverage as its alpha, so the
   // buffer stays premultiplied-consistent.
   const float colour[4] = {rgb[0], rgb[1], rgb[2], 1.0f};
-  // DejaVu Sans by name (OIIO searches its font directories, /usr/share/fonts among them), then
-  // by the Debian path: the same glyphs everywhere fonts-dejavu-core is installed.
-  static const char* const kFonts[] = {"DejaVuSans", "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"};
   for (const char* font : kFonts) {
     if (!OIIO::ImageBufAlgo::text_size("x", size, font).defined()) {
       (void)OIIO::geterror();  // clear OIIO's per-thread error message
@@ -376,6 +377,19 @@ Status draw_text(Image& image, int x, int y, std::string_view text, int size, st
     return Status::ok();
   }
   return Status::input("no font for labels: install fonts-dejavu-core");
+}
+
+int text_width(std::string_view text, int size) {
+  if (text.empty() || size <= 0) return 0;
+  for (const char* font : kFonts) {
+    const OIIO::ROI roi = OIIO::ImageBufAlgo::text_size(text, size, font);
+    if (!roi.defined()) {
+      (void)OIIO::geterror();
+      continue;
+    }
+    return roi.width();
+  }
+  return -1;
 }
 
 }  // namespace r1::render

@@ -50,4 +50,8 @@ Status write_image(const Image& image, const std::filesystem::path& path, std::a
 // over the image (OpenImageIO's text renderer). Fails with an error when no font is available.
 Status draw_text(Image& image, int x, int y, std::string_view text, int size, std::array<float, 3> rgb);
 
+// The advance width in pixels of `text` set in draw_text's font at `size` pixels (OpenImageIO's
+// text_size), or -1 when no font is available. For typesetting T0 text and cards (R1-RND-133).
+int text_width(std::string_view text, int size);
+
 }  // namespace r1::render

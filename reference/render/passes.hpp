@@ -39,7 +39,7 @@ struct OpaqueLayer {
         owner(static_cast<std::size_t>(w) * h, kNone) {}
 };
 
-// One T1/T2 analytic impostor (T0 draws as T1 until the content tier exists, R1-RND-024): the
+// One T1/T2 analytic impostor (a T0 particle without content draws as T1, R1-RND-024): the
 // particle, its shape, centre, bounding radius and colour, and the pixel rectangle that holds
 // every pixel whose centre can see it (project_box of its bounding cube).
 struct Impostor {
@@ -52,7 +52,8 @@ struct Impostor {
 };
 
 // The impostors of a frame, in ascending particle order (the culled list's order): every visible
-// particle at T2 or above whose rectangle is not empty.
+// particle at T2 or above whose rectangle is not empty, except T0 particles with content
+// (R1-RND-130: the content pass draws them).
 std::vector<Impostor> impostor_list(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled);
 
 // The headlight shading of every opaque surface: ambient 0.25 plus 0.75 Lambert toward the

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include "content_pass.hpp"
 #include "r1/reference/ply_export.hpp"  // kSplatOpacity, kSplatSigmaPerRadius: one splat everywhere
 #include "shapes.hpp"
 
@@ -337,6 +338,8 @@ std::vector<Impostor> impostor_list(const Scene& s, const View& v, const CameraF
   std::vector<Impostor> out;
   for (const Visible& vis : culled.visible) {
     if (vis.tier > Tier::kT2) continue;
+    // A T0 particle with content opens: the content pass draws it instead (R1-RND-130).
+    if (vis.tier == Tier::kT0 && s.content && s.content->has(vis.particle)) continue;
     const std::uint32_t p = vis.particle;
     const double r = s.radius[p];
     const Vec3 c = s.position[p];
@@ -373,8 +376,28 @@ void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullR
   st.edges_in_view = bs.in_view;
   st.edges_considered = bs.considered;
   st.edges_drawn = bs.drawn;
+  // An opened particle (T0 with content, R1-RND-130) is entered by its edges at its bounding
+  // sphere, so they do not cross its content. A tube ends at it when the end is the particle or a
+  // cluster whose one member it is (the cluster's centroid is then the particle's position).
+  const auto opened_radius = [&](const Endpoint& e) {
+    if (!s.content) return 0.0;
+    std::int64_t p = e.level < 0 ? static_cast<std::int64_t>(e.id) : -1;
+    if (e.level >= 0 && s.nodes[static_cast<std::size_t>(e.level)][e.id].count == 1)
+      for_each_member(s, e.level, e.id, [&](std::uint32_t q) { p = q; });
+    if (p < 0) return 0.0;
+    const auto q = static_cast<std::uint32_t>(p);
+    return s.content->has(q) && size[q] > v.tiers.t0 ? s.radius[q] : 0.0;
+  };
   for (const Tube& tube : tubes) {
-    const Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
+    Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
+    const double cut_a = opened_radius(tube.a), cut_b = opened_radius(tube.b);
+    if (cut_a > 0 || cut_b > 0) {
+      const double len = length(b - a);
+      if (!(cut_a + cut_b < len)) continue;
+      const Vec3 dir = (b - a) / len;
+      b = b - dir * cut_b;
+      a = a + dir * cut_a;
+    }
     const double cap = 0.3 * std::min(endpoint_radius(s, tube.a), endpoint_radius(s, tube.b));
     const double rho = std::min(0.1 * s.median_radius * std::sqrt(tube.w), cap);
     if (!(rho > 0)) continue;
@@ -569,6 +592,8 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   const std::vector<Impostor> impostors = impostor_list(s, v, f, culled);
   if (passes.impostors) R1_TRY(passes.impostors(impostors, v, f, op));
   else draw_impostors(impostors, v, f, op);
+  // T0 content after the shapes, with the same nearest-hit rule (R1-RND-135).
+  st.content = draw_content(s, v, f, culled, op);
   st.impostor_s = seconds_since(t0);
 
   t0 = clock::now();

@@ -24,6 +24,7 @@ struct NodeData {
 };
 
 struct NeuralField;
+struct ContentScene;
 
 struct Scene {
   std::uint32_t n = 0;
@@ -44,6 +45,8 @@ struct Scene {
   std::uint64_t seed = 0;          // counter-based jitter seed: the snapshot digest's first 8 bytes
   // The trained far field (R1-NRF-031), borrowed; null: the analytic field draws T-infinity.
   const NeuralField* neural = nullptr;
+  // T0 content (R1-RND-130), borrowed; null: a particle above s_T0 is drawn as T1.
+  const ContentScene* content = nullptr;
 };
 
 // b(p) = clamp((n phi / 1)^(1/4), 0.6, 3): brighter particles carry more focus (R1-RND-014).

@@ -67,6 +67,7 @@
     cam: { position: [0, 0, 2500], orientation: [1, 0, 0, 0], fov: 50 },
     width: 0, height: 0, fixedSize: false,
     keys: new Set(), flights: [], portal: null,
+    content: new Map(),   // particle -> its T0 content entry of meta.json (R1-VIEW-070)
     frameMs: 0, lastFrame: 0, tierCounts: [0, 0, 0, 0, 0], visible: 0, labelsDrawn: 0,
     transition: null,     // {from: Float64Array, start, seconds}: positions easing into a new generation
     shown: null,          // the positions drawn: pos, or the eased ones during a transition
@@ -188,6 +189,7 @@
     }
     for (const key of ['pos', 'radius', 'phi', 'color', 'edges', 'weights', 'a2', 'degree', 'clusters', 'nodes', 'shape', 'labels']) S[key] = d[key];
     Object.assign(S, { meta: d.meta, gen: d.meta.generation, n: d.meta.n, m: d.meta.m });
+    S.content = new Map((d.meta.content || []).map((c) => [c.particle, c]));
     S.levelOffset = [0];
     for (const c of d.meta.hierarchy_levels) S.levelOffset.push(S.levelOffset[S.levelOffset.length - 1] + c);
     S.incident = indexEdges();
@@ -968,10 +970,57 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     await fly(portalPose(S.cam, p));
     S.portal = { p, back };
     document.getElementById('portal-title').textContent = S.labels[p] || '';
+    const c = S.content.get(p);
     document.getElementById('portal-body').textContent =
-      `focus phi ${S.phi[p].toPrecision(4)}  ·  ${S.incident.offset[p + 1] - S.incident.offset[p]} links  ·  no content given for this particle`;
+      `focus phi ${S.phi[p].toPrecision(4)}  ·  ${S.incident.offset[p + 1] - S.incident.offset[p]} links  ·  ` +
+      (c ? `content: ${c.status === 'ok' ? c.type : c.status}` : 'no content given for this particle');
+    await showContent(c);
     document.getElementById('portal').style.display = 'block';
     return S.cam;
+  }
+  // The particle's T0 content in the panel (R1-VIEW-072): an image as <img>, text as the text of a
+  // <pre> (never parsed as HTML), anything else, and content that is missing, unreadable or
+  // refused, as a card naming it.
+  async function showContent(c) {
+    const box = document.getElementById('portal-content');
+    box.replaceChildren();
+    if (!c) return;
+    if (c.status === 'ok' && c.kind === 'image') {
+      const img = document.createElement('img');
+      img.id = 'portal-image';
+      img.alt = c.source;
+      img.src = c.url;
+      box.append(img);
+      await img.decode().catch(() => { box.replaceChildren(card('unreadable', `${c.source}: the browser cannot show it`)); });
+      return;
+    }
+    if (c.status === 'ok' && c.kind === 'text') {
+      const pre = document.createElement('pre');
+      pre.id = 'portal-text';
+      box.append(pre);
+      try {
+        const r = await fetch(c.url);
+        if (!r.ok) throw new Error(`HTTP ${r.status}`);
+        pre.textContent = await r.text();
+      } catch (e) {
+        box.replaceChildren(card('unreadable', `${c.source}: ${e.message}`));
+      }
+      return;
+    }
+    box.append(c.status === 'ok' ? card(c.type, c.source, 'other') : card(c.status, `${c.source}: ${c.reason}`));
+  }
+  function card(title, subtitle, status = title) {
+    const d = document.createElement('div');
+    d.id = 'portal-card';
+    d.className = `card ${status}`;
+    const t = document.createElement('div');
+    t.className = 'title';
+    t.textContent = title;
+    const s = document.createElement('div');
+    s.className = 'sub';
+    s.textContent = subtitle;
+    d.append(t, s);
+    return d;
   }
   async function closePortal(flyBack = true) {
     const pt = S.portal;

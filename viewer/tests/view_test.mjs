@@ -98,8 +98,38 @@ try {
   await page.evaluate(() => window.r1view.frame());
   const inside = await page.evaluate(() => window.r1view.stats());
   check(inside.portal === p && inside.tiers[0] >= 1, `portal step opens particle ${p} at T0 (T0 count ${inside.tiers[0]})`);
+  // T0 content in the portal panel (R1-VIEW-072): the image of 'Math entity 1' as an <img> of its size.
+  const shown = await page.evaluate(() => {
+    const img = document.getElementById('portal-image');
+    return img ? { w: img.naturalWidth, h: img.naturalHeight, src: img.getAttribute('src') } : null;
+  });
+  check(shown && shown.w === 48 && shown.h === 32, `the portal shows the particle's image (${JSON.stringify(shown)})`);
   const back = await page.evaluate(() => window.r1view.exitPortal());
   check(close(back.position, before.position, 1e-9), 'stepping out returns to the pose it left');
+  const contentOf = async (title) => {
+    const q = await page.evaluate((t) => window.r1view.find(t), title);
+    await page.evaluate((k) => window.r1view.portal(k), q);
+    const c = await page.evaluate(() => ({
+      text: document.getElementById('portal-text')?.textContent ?? null,
+      html: document.getElementById('portal-content').innerHTML,
+      card: document.getElementById('portal-card')?.textContent ?? null,
+    }));
+    await page.evaluate(() => window.r1view.exitPortal());
+    return c;
+  };
+  const text = await contentOf('Math entity 2');
+  check(text.text === 'T0 <b>text</b> of a particle\nsecond line\n' && !text.html.includes('<b>'),
+        `the portal shows a text as text, never as HTML (${JSON.stringify(text.text)})`);
+  const gone = await contentOf('Math entity 3');
+  check(gone.card !== null && gone.card.startsWith('missing'), `missing content shows a "missing" card (${JSON.stringify(gone.card)})`);
+  const none = await contentOf('Math entity 4');
+  check(none.card === null && none.text === null && none.html === '', 'a particle without content shows no content');
+  const listed = meta.content.map((c) => c.url).filter(Boolean);
+  const fetched = await Promise.all(listed.map((u) => fetch(main.url + u).then((r) => r.status)));
+  check(listed.length === 2 && fetched.every((s) => s === 200), `the listed content files are served (${listed.join(', ')})`);
+  const free = [...Array(meta.n).keys()].find((k) => !meta.content.some((c) => c.particle === k));
+  const unlisted = await fetch(`${main.url}data/${meta.generation}/content/${free}.png`).then((r) => r.status);
+  check(unlisted === 404, `a content file the index does not list is 404 (${unlisted})`);
 
   // Frames against the reference renderer at suite viewpoints (R1-CONF-004), labels off on both.
   const rad = Math.PI / 180;

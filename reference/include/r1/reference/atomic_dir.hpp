@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <string_view>
+#include <vector>
 
 #include "r1/spec/status.hpp"
 
@@ -20,7 +21,8 @@ class AtomicDirectory {
   AtomicDirectory& operator=(const AtomicDirectory&) = delete;
 
   Status open();
-  Status write(const std::string& name, std::string_view bytes);  // one file, flushed
+  // One file, flushed; `name` may hold folders below the directory (made as needed).
+  Status write(const std::string& name, std::string_view bytes);
   // The temporary directory after open(), for writers that make their own files there (images).
   const std::filesystem::path& temp_path() const { return temp_; }
   Status commit();
@@ -28,6 +30,7 @@ class AtomicDirectory {
  private:
   std::filesystem::path target_, temp_;
   std::function<bool(const std::filesystem::path&)> replaceable_;
+  std::vector<std::filesystem::path> subdirs_;  // folders made for names with a '/', relative to temp_
   bool committed_ = false;
 };
 

@@ -29,6 +29,7 @@ struct FrameStats {
   std::uint64_t edges_considered = 0;  // layout edges with an endpoint at T2 or above
   std::uint64_t edges_drawn = 0;       // tube instances after bundling
   std::uint64_t splats = 0, labels = 0;
+  std::uint64_t content = 0;  // T0 particles drawn with their content (R1-RND-135)
   std::uint64_t field_walked = 0, field_candidates = 0, field_samples = 0, field_evaluations = 0;
   std::uint64_t field_neural = 0;  // samples the neural field drew (R1-NRF-031)
   // Pixels a backend's field and composite pass left to the host (R1-RND-078).
