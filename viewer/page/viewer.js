@@ -68,6 +68,8 @@
     width: 0, height: 0, fixedSize: false,
     keys: new Set(), flights: [], portal: null,
     content: new Map(),   // particle -> its T0 content entry of meta.json (R1-VIEW-070)
+    contentTex: new Map(), // particle -> {tex, w, h, page}: its content as a texture (R1-VIEW-073)
+    contentDrawn: 0,       // T0 particles whose content the last frame drew
     frameMs: 0, lastFrame: 0, tierCounts: [0, 0, 0, 0, 0], visible: 0, labelsDrawn: 0,
     transition: null,     // {from: Float64Array, start, seconds}: positions easing into a new generation
     shown: null,          // the positions drawn: pos, or the eased ones during a transition
@@ -201,7 +203,10 @@
   async function pollGenerations() {
     try {
       const meta = await (await fetch('meta.json')).json();
-      if (meta.generation !== S.gen) install(await loadGeneration(meta));
+      if (meta.generation !== S.gen) {
+        install(await loadGeneration(meta));
+        await prepareContent();
+      }
     } catch (e) { /* the server is gone or switched mid-fetch: try again */ }
     setTimeout(pollGenerations, 1000);
   }
@@ -367,9 +372,28 @@
         t.w += S.weights[e]; t.a2 += a2; t.deg += deg;
       }
     }
+    // An opened particle (T0 with content, R1-RND-130) is entered by its edges at its bounding
+    // sphere: a tube ending at it, or at a one-member cluster of it, is cut back by its radius.
+    const cut = new Map();
+    for (const p of S.contentTex.keys()) {
+      if (!(size[p] > S.meta.tiers.t0)) continue;
+      cut.set(p, S.radius[p]);
+      for (let l = 0; l < 4; ++l) {
+        const key = S.n + S.levelOffset[l] + S.clusters[4 * p + l];
+        if (S.nodes[nodeAt(key) + 17] === 1) cut.set(key, S.radius[p]);
+      }
+    }
     const tubes = [];
     for (const t of [...merged.keys()].sort((x, y) => x - y).map((k) => merged.get(k))) {
-      const a = endpointPos(t.a), b = endpointPos(t.b);
+      let a = endpointPos(t.a), b = endpointPos(t.b);
+      const ca = cut.get(t.a) || 0, cb = cut.get(t.b) || 0;
+      if (ca > 0 || cb > 0) {
+        const l = len(sub(b, a));
+        if (!(ca + cb < l)) continue;
+        const dir = mul(sub(b, a), 1 / l);
+        b = sub(b, mul(dir, cb));
+        a = add(a, mul(dir, ca));
+      }
       const rho = Math.min(0.1 * S.meta.median_radius * Math.sqrt(t.w), 0.3 * Math.min(endpointRadius(t.a), endpointRadius(t.b)));
       if (!(rho > 0)) continue;
       const pab = t.deg > 0 ? t.w / t.deg : 0;
@@ -439,11 +463,14 @@ void main() {
   // the handoff band being both.
   bool draw = d > 1e-3 && (uPass == 0 ? s > uTiers.y : s <= uTiers.y);
   if (uPass == 0 && d <= aRadius) draw = false;
+  int shape = int(aShape + 0.5);
+  bool opened = shape >= 16;
+  if (uPass == 0 && opened && s > uTiers.w) draw = false;   // the content pass draws it
   vWeight = s > uTiers.x - uBand ? 0.9 * (1.0 - winf) : 0.0;
   vWeightF = uField == 1 ? 0.25 * 2.5066283 * aNphi * winf : 0.0;
   if (uPass == 1 && !(vWeight > 0.0 || vWeightF > 0.0)) draw = false;
   if (!draw) { gl_Position = vec4(2.0, 2.0, 2.0, 1.0); return; }
-  vCenter = c; vColor = aColor; vRadius = aRadius; vShape = int(aShape + 0.5);
+  vCenter = c; vColor = aColor; vRadius = aRadius; vShape = opened ? shape - 16 : shape;
   float L = length(c);
   vec3 fw = c / L;
   vec3 side = abs(fw.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
@@ -575,6 +602,27 @@ void main() {
   outColor = vec4(vColor * a, a);
   gl_FragDepth = -vCenter.z / ${FAR.toFixed(1)};
 }`;
+  // T0 content (R1-RND-130..135, R1-VIEW-073): a textured panel or page in scene coordinates,
+  // unlit, into the opaque layer. Textures are display sRGB stored as SRGB8_ALPHA8, so they are
+  // sampled (bilinearly) in linear light; an image's transparent pixels show linear 0.05 grey.
+  const contentVs = common + `
+layout(location = 0) in vec3 aPos;
+layout(location = 1) in vec2 aUv;
+out vec2 vUv; out float vDepth;
+void main() {
+  vec3 c = uView * (aPos - uEye);
+  vUv = aUv; vDepth = -c.z;
+  gl_Position = project(c);
+}`;
+  const contentFs = common + `
+in vec2 vUv; in float vDepth;
+uniform sampler2D uTex;
+out vec4 outColor;
+void main() {
+  vec4 t = texture(uTex, vUv);
+  outColor = vec4(t.rgb * t.a + vec3(0.05) * (1.0 - t.a), 1.0);
+  gl_FragDepth = vDepth / ${FAR.toFixed(1)};
+}`;
   // Edge tubes (R1-RND-065, 066): a quad along a..b as wide as the tube, shaded as a cylinder under
   // the headlight, with the flow strip.
   const tubeVs = common + `
@@ -646,6 +694,16 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     G.particle = program(particleVs, particleFs);
     G.tube = program(tubeVs, tubeFs);
     G.blit = program(blitVs, blitFs);
+    G.content = program(contentVs, contentFs);
+    G.contentBuf = gl.createBuffer();
+    G.contentVao = gl.createVertexArray();
+    gl.bindVertexArray(G.contentVao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, G.contentBuf);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 20, 0);
+    gl.enableVertexAttribArray(1);
+    gl.vertexAttribPointer(1, 2, gl.FLOAT, false, 20, 12);
+    gl.bindVertexArray(null);
     G.quad = gl.createBuffer();
     gl.bindBuffer(gl.ARRAY_BUFFER, G.quad);
     gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 1, -1, -1, 1, 1, 1]), gl.STATIC_DRAW);
@@ -694,7 +752,8 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
         inst[o + 3] = S.radius[item];
         inst[o + 4] = S.color[3 * item]; inst[o + 5] = S.color[3 * item + 1]; inst[o + 6] = S.color[3 * item + 2];
         inst[o + 7] = S.n * S.phi[item];
-        inst[o + 8] = S.shape[item];
+        // +16: the particle has T0 content, which replaces its shape at T0 (R1-RND-130).
+        inst[o + 8] = S.shape[item] + (S.contentTex.has(item) ? 16 : 0);
       } else {
         // A node kernel: radius 0 puts it in the field pass with weight 1 (R1-RND-045).
         const b = (-1 - item) * NODE_FLOATS;
@@ -787,6 +846,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     const pass = gl.getUniformLocation(G.particle, 'uPass');
     gl.uniform1i(pass, 0);
     gl.drawArraysInstanced(gl.TRIANGLE_STRIP, 0, 4, G.instanceCount);
+    drawContent(c, f);
     // Splats and field kernels in one stream: premultiplied "over", far to near, depth-tested
     // against the opaque layer (R1-RND-070).
     gl.enable(gl.BLEND);
@@ -805,6 +865,163 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     gl.bindTexture(gl.TEXTURE_2D, G.tex);
     gl.uniform1i(gl.getUniformLocation(G.blit, 'uScene'), 0);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  // ---- T0 content in the frame (R1-RND-130..135, R1-VIEW-073) -----------------------------------
+  const TEXT_RADIUS = 0.7, TEXT_HALF_ANGLE = Math.PI / 3, TEXT_WIDTH = 1024, TEXT_SIZE = 44, TEXT_LINE = 56, TEXT_MARGIN = 48;
+  const CARD_W = 1024, CARD_H = 640;
+  const srgb = (v) => Math.round(255 * (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055));
+  const css = (rgb) => `rgb(${rgb.map(srgb).join(',')})`;
+  const fileName = (p) => p.split('/').pop();
+  function paperCanvas(w, h, background) {
+    const cv = document.createElement('canvas');
+    cv.width = w; cv.height = h;
+    const g = cv.getContext('2d');
+    g.fillStyle = css(background);
+    g.fillRect(0, 0, w, h);
+    return [cv, g];
+  }
+  // The longest prefix of s (by code points) that fits within width, else at least one.
+  function fitPrefix(g, s, width) {
+    const cps = [...s];
+    let lo = 0, hi = cps.length;
+    while (hi - lo > 1) { const mid = (lo + hi) >> 1; if (g.measureText(cps.slice(0, mid).join('')).width <= width) lo = mid; else hi = mid; }
+    return Math.max(lo, 1);
+  }
+  function cardCanvas(background, title, subtitle) {
+    const [cv, g] = paperCanvas(CARD_W, CARD_H, background);
+    g.fillStyle = css([0.9, 0.9, 0.9]);
+    g.textAlign = 'center';
+    g.textBaseline = 'alphabetic';
+    g.font = '110px "DejaVu Sans", sans-serif';
+    g.fillText(title, CARD_W / 2, CARD_H / 2, CARD_W - 40);
+    g.font = '34px "DejaVu Sans", sans-serif';
+    g.fillText(subtitle, CARD_W / 2, CARD_H / 2 + 90, CARD_W - 40);
+    return cv;
+  }
+  // R1-RND-133's page: 44 px type on a 56 px pitch, 48 px margins, greedy breaks between words.
+  function pageCanvas(text) {
+    const arc = 2 * TEXT_RADIUS * TEXT_HALF_ANGLE, high = 2 * Math.sqrt(1 - TEXT_RADIUS * TEXT_RADIUS);
+    const h = Math.round(TEXT_WIDTH * high / arc), width = TEXT_WIDTH - 2 * TEXT_MARGIN;
+    const [cv, g] = paperCanvas(TEXT_WIDTH, h, [0.80, 0.78, 0.72]);
+    g.font = `${TEXT_SIZE}px "DejaVu Sans", sans-serif`;
+    g.fillStyle = css([0.015, 0.015, 0.015]);
+    g.textBaseline = 'alphabetic';
+    const maxLines = Math.max(1, Math.floor((h - 2 * TEXT_MARGIN) / TEXT_LINE));
+    const lines = [];
+    const clean = text.replace(/[\u0000-\u0009\u000b-\u001f\u007f]/g, ' ');
+    for (const para of clean.split('\n')) {
+      let line = '';
+      for (let word of para.split(' ').filter((w) => w.length)) {
+        const trial = line ? line + ' ' + word : word;
+        if (g.measureText(trial).width <= width) { line = trial; continue; }
+        if (line) lines.push(line);
+        line = '';
+        while (g.measureText(word).width > width) {
+          const n = fitPrefix(g, word, width), cps = [...word];
+          lines.push(cps.slice(0, n).join(''));
+          word = cps.slice(n).join('');
+        }
+        line = word;
+      }
+      lines.push(line);
+    }
+    if (lines.length > maxLines) {
+      lines.length = maxLines;
+      const last = lines[maxLines - 1] + ' \u2026';
+      lines[maxLines - 1] = [...last].slice(0, fitPrefix(g, last, width)).join('');
+    }
+    lines.forEach((l, k) => g.fillText(l, TEXT_MARGIN, TEXT_MARGIN + TEXT_SIZE + k * TEXT_LINE));
+    return cv;
+  }
+  function texture(source) {
+    const tex = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.pixelStorei(gl.UNPACK_COLORSPACE_CONVERSION_WEBGL, gl.NONE);
+    gl.pixelStorei(gl.UNPACK_PREMULTIPLY_ALPHA_WEBGL, false);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.SRGB8_ALPHA8, gl.RGBA, gl.UNSIGNED_BYTE, source);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    return { tex, w: source.width, h: source.height };
+  }
+  // Every content entry of the generation as a texture, the way the reference prepares it
+  // (R1-RND-132..134): images, text pages, and cards for the rest.
+  async function prepareContent() {
+    for (const t of S.contentTex.values()) gl.deleteTexture(t.tex);
+    const out = new Map();
+    const CARDS = { other: [0.06, 0.09, 0.16], missing: [0.30, 0.02, 0.02], unreadable: [0.30, 0.13, 0.01], refused: [0.20, 0.02, 0.22] };
+    for (const [p, c] of S.content) {
+      let t = null;
+      try {
+        if (c.status === 'ok' && c.kind === 'image') {
+          const img = new Image();
+          img.src = c.url;
+          await img.decode();
+          t = texture(img);
+        } else if (c.status === 'ok' && c.kind === 'text') {
+          const r = await fetch(c.url);
+          if (!r.ok) throw new Error(`HTTP ${r.status}`);
+          t = { ...texture(pageCanvas(await r.text())), page: true };
+        }
+      } catch (e) {
+        t = texture(cardCanvas(CARDS.unreadable, 'unreadable', `${fileName(c.source)}: the browser cannot show it`));
+      }
+      if (!t) {
+        t = c.status === 'ok' ? texture(cardCanvas(CARDS.other, c.type, fileName(c.source)))
+          : texture(cardCanvas(CARDS[c.status] || CARDS.unreadable, c.status,
+                               c.status === 'refused' ? `${c.source}: ${c.reason}` : c.status === 'missing' ? fileName(c.source)
+                                 : `${fileName(c.source)}: ${c.reason}`));
+      }
+      out.set(p, t);
+    }
+    S.contentTex = out;
+    G.tubeKey = null;   // the instances carry the content flag
+  }
+  // The panels and pages of the visible T0 particles with content (R1-RND-131, 133).
+  function drawContent(c, f) {
+    S.contentDrawn = 0;
+    if (!S.contentTex.size || !G.cls) return;
+    const t0 = S.meta.tiers.t0, verts = [], draws = [];
+    for (const [p, t] of S.contentTex) {
+      if (!(G.cls.size[p] > t0)) continue;
+      const X = [S.shown[3 * p], S.shown[3 * p + 1], S.shown[3 * p + 2]], r = S.radius[p];
+      const toEye = sub(c.position, X);
+      const n = len(toEye) > 0 ? mul(toEye, 1 / len(toEye)) : mul(f.forward, -1);
+      let ex = sub(f.right, mul(n, dot(f.right, n)));
+      ex = len(ex) > 1e-12 ? mul(ex, 1 / len(ex)) : norm(cross(f.up, n));
+      const ey = cross(n, ex);
+      const first = verts.length / 5;
+      const put = (q, u, v) => verts.push(q[0], q[1], q[2], u, v);
+      if (!t.page) {
+        const a = t.w / t.h, hh = r / Math.sqrt(1 + a * a), hw = a * hh;
+        const at = (sx, sy) => add(X, add(mul(ex, sx * hw), mul(ey, sy * hh)));
+        put(at(-1, 1), 0, 0); put(at(-1, -1), 0, 1); put(at(1, 1), 1, 0); put(at(1, -1), 1, 1);
+      } else {
+        const R = TEXT_RADIUS * r, hh = r * Math.sqrt(1 - TEXT_RADIUS * TEXT_RADIUS), axis = add(X, mul(n, R)), cols = 48;
+        for (let i = 0; i <= cols; ++i) {
+          const th = -TEXT_HALF_ANGLE + 2 * TEXT_HALF_ANGLE * i / cols, u = i / cols;
+          const q = add(axis, add(mul(n, -R * Math.cos(th)), mul(ex, R * Math.sin(th))));
+          put(add(q, mul(ey, hh)), u, 0); put(add(q, mul(ey, -hh)), u, 1);
+        }
+      }
+      draws.push([t.tex, first, verts.length / 5 - first]);
+    }
+    S.contentDrawn = draws.length;
+    if (!draws.length) return;
+    setUniforms(G.content, c, f, 1);
+    gl.bindVertexArray(G.contentVao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, G.contentBuf);
+    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(verts), gl.DYNAMIC_DRAW);
+    gl.activeTexture(gl.TEXTURE0);
+    gl.uniform1i(gl.getUniformLocation(G.content, 'uTex'), 0);
+    for (const [tex, first, count] of draws) {
+      gl.bindTexture(gl.TEXTURE_2D, tex);
+      gl.drawArrays(gl.TRIANGLE_STRIP, first, count);
+    }
+    gl.useProgram(G.particle);
+    gl.bindVertexArray(G.vao);
   }
 
   // ---- labels (R1-RND-067) --------------------------------------------------------------------
@@ -1147,6 +1364,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     resize();
     cameraFromUrl();
     install(d);
+    await prepareContent();
     bindInput();
     requestAnimationFrame(animate);
     await nextFrame();
@@ -1173,6 +1391,6 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     stats: () => ({ frameMs: S.frameMs, tiers: S.tierCounts.slice(), visible: S.visible, labels: S.labelsDrawn,
                     n: S.n, m: S.m, generation: S.gen, tau: tauCam(S.cam), flying: S.flights.length > 0,
                     portal: S.portal ? S.portal.p : -1, width: S.width, height: S.height, instances: G.instanceCount, cpuMs: S.cpuMs,
-                    tubes: G.tubeCount }),
+                    tubes: G.tubeCount, content: S.contentDrawn }),
   };
 })();

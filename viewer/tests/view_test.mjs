@@ -131,6 +131,34 @@ try {
   const unlisted = await fetch(`${main.url}data/${meta.generation}/content/${free}.png`).then((r) => r.status);
   check(unlisted === 404, `a content file the index does not list is 404 (${unlisted})`);
 
+  // T0 content in the frame (R1-VIEW-073): warped to a particle with content at 960x540 (3 r away,
+  // about 390 px across: T0), the page's frame against the reference's last frame of the same
+  // warp, labels and field off on both. The panel's pixels are compared, and the frame by CIEDE2000.
+  const t0Views = [];
+  for (const [title, what] of [['Math entity 1', 'image'], ['Math entity 2', 'text']]) {
+    const file = title.replace(/[^a-z0-9]/gi, '_');
+    const pagePng = path.join(work, `page-t0-${file}.png`), refBase = path.join(work, `ref-t0-${file}.png`);
+    await page.goto(`${main.url}?eye=${eye}&target=${target}&size=960x540&labels=0&field=0&ui=0&time=0`);
+    await page.evaluate(() => window.r1view.ready);
+    await page.evaluate((q) => window.r1view.warp(q), title);
+    await page.evaluate(() => window.r1view.frame());
+    const st = await page.evaluate(() => window.r1view.stats());
+    await page.locator('#gl').screenshot({ path: pagePng });
+    execFileSync(r1, ['render', epoch, '--eye', ...eye.map(String), '--target', ...target.map(String), '--size', '960x540',
+                      '--no-labels', '--no-field', '--path', `warp:${title}`, '--fps', '2', '-o', refBase, '-q']);
+    const refPng = refBase.replace(/\.png$/, '-001.png');
+    let out;
+    try { out = execFileSync(r1, ['diff', pagePng, refPng, '--json', '--fail-mean', '1000']).toString(); } catch (err) { out = err.stdout.toString(); }
+    const d = JSON.parse(out);
+    t0Views.push({ view: `T0 ${what} (${title})`, mean_de: d.covered_mean_2000, covered: d.covered, t0: st.tiers[0], contentDrawn: st.content });
+  }
+  for (const v of t0Views) {
+    console.log(`view ${v.view}: mean CIEDE2000 ${v.mean_de.toFixed(2)} over ${v.covered} covered pixels against r1 render, ` +
+                `T0 ${v.t0}, content drawn ${v.contentDrawn}`);
+    check(v.t0 >= 1 && v.contentDrawn >= 1, `view ${v.view}: the particle is at T0 and its content is drawn in the frame`);
+    check(v.mean_de <= 2, `view ${v.view}: mean CIEDE2000 ${v.mean_de.toFixed(2)} <= 2 over the covered pixels (R1-VIEW-073)`);
+  }
+
   // Frames against the reference renderer at suite viewpoints (R1-CONF-004), labels off on both.
   const rad = Math.PI / 180;
   const views = [
