@@ -178,8 +178,9 @@ std::optional<ContentTexture> image_texture(const std::filesystem::path& path) {
   const bool is_8bit = stored.basetype == OIIO::TypeDesc::UINT8;
   const int alpha = spec.alpha_channel >= 0 ? spec.alpha_channel : (nc == 2 ? 1 : (nc >= 4 ? 3 : -1));
   const auto decode = [&](float v) -> double {
-    if (is_float) return v;
-    if (is_8bit) return srgb8_to_linear(static_cast<std::uint8_t>(std::clamp(std::floor(v * 255.0f + 0.5f), 0.0f, 255.0f)));
+    if (is_float) return static_cast<double>(v);
+    if (is_8bit)
+      return static_cast<double>(srgb8_to_linear(static_cast<std::uint8_t>(std::clamp(std::floor(v * 255.0f + 0.5f), 0.0f, 255.0f))));
     return srgb_decode(std::clamp(static_cast<double>(v), 0.0, 1.0));
   };
   // A whole-number box filter keeps large images within kMaxImageSide (R1-RND-132).
@@ -216,7 +217,7 @@ Vec3 sample(const ContentTexture& t, double u, double v) {
     const int cx = static_cast<int>(std::clamp(xi, 0.0, static_cast<double>(t.width - 1)));
     const int cy = static_cast<int>(std::clamp(yi, 0.0, static_cast<double>(t.height - 1)));
     const float* p = t.rgb.data() + (static_cast<std::size_t>(cy) * t.width + cx) * 3;
-    return Vec3{p[0], p[1], p[2]};
+    return Vec3{static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])};
   };
   return (at(fx0, fy0) * (1 - ax) + at(fx0 + 1, fy0) * ax) * (1 - ay) + (at(fx0, fy0 + 1) * (1 - ax) + at(fx0 + 1, fy0 + 1) * ax) * ay;
 }
