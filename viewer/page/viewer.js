@@ -192,6 +192,9 @@
     for (const key of ['pos', 'radius', 'phi', 'color', 'edges', 'weights', 'a2', 'degree', 'clusters', 'nodes', 'shape', 'labels']) S[key] = d[key];
     Object.assign(S, { meta: d.meta, gen: d.meta.generation, n: d.meta.n, m: d.meta.m });
     S.content = new Map((d.meta.content || []).map((c) => [c.particle, c]));
+    // The earlier generation's content textures go with it; prepareContent makes this one's.
+    for (const t of S.contentTex.values()) gl.deleteTexture(t.tex);
+    S.contentTex = new Map();
     S.levelOffset = [0];
     for (const c of d.meta.hierarchy_levels) S.levelOffset.push(S.levelOffset[S.levelOffset.length - 1] + c);
     S.incident = indexEdges();
@@ -949,8 +952,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
   // Every content entry of the generation as a texture, the way the reference prepares it
   // (R1-RND-132..134): images, text pages, and cards for the rest.
   async function prepareContent() {
-    for (const t of S.contentTex.values()) gl.deleteTexture(t.tex);
-    const out = new Map();
+    const gen = S.gen, out = new Map();
     const CARDS = { other: [0.06, 0.09, 0.16], missing: [0.30, 0.02, 0.02], unreadable: [0.30, 0.13, 0.01], refused: [0.20, 0.02, 0.22] };
     for (const [p, c] of S.content) {
       let t = null;
@@ -975,6 +977,10 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
                                  : `${fileName(c.source)}: ${c.reason}`));
       }
       out.set(p, t);
+    }
+    if (S.gen !== gen) {   // a newer generation arrived meanwhile: these textures are not its
+      for (const t of out.values()) gl.deleteTexture(t.tex);
+      return;
     }
     S.contentTex = out;
     G.tubeKey = null;   // the instances carry the content flag
