@@ -80,9 +80,13 @@ san-build: deps
 	  $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(SAN) -j $(JOBS)
 
+# Left out under the sanitizers, and run in `tests`: Backend.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold
+# (a 39,304-row reference solve, 180 s under ASan; the cpu backend's kernels and TBB splits run
+# under the sanitizers in CpuPanelKernels.* and the every-backend tests).
+SAN_EXCLUDE := ^Backend\.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold$$
 san-tests:
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  ctest --test-dir $(SAN) --output-on-failure -j $(JOBS) -LE "slow|install|browser" --timeout 1800
+	  ctest --test-dir $(SAN) --output-on-failure -j $(JOBS) -LE "slow|install|browser" -E '$(SAN_EXCLUDE)' --timeout 1800
 
 test-san: san-build
 	@$(MAKE) --no-print-directory san-tests
