@@ -1,6 +1,7 @@
 // r_0 from the layout (R1-ENC-007): the median spacing of the distinct positions and the median
 // focus set the scene-scale constant so that a median particle's radius is half the median
-// spacing: two median particles at the median spacing touch, never overlap. Exact integer distances through the hierarchy's k-d tree.
+// spacing: two median particles at the median spacing touch, never overlap. Exact integer
+// distances through the hierarchy's k-d tree.
 #include <algorithm>
 #include <vector>
 
