@@ -80,10 +80,16 @@ san-build: deps
 	  $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(SAN) -j $(JOBS)
 
-# Left out under the sanitizers, and run in `tests`: Backend.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold
-# (a 39,304-row reference solve, 180 s under ASan; the cpu backend's kernels and TBB splits run
-# under the sanitizers in CpuPanelKernels.* and the every-backend tests).
-SAN_EXCLUDE := ^Backend\.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold$$
+# Left out under the sanitizers, and run in `tests` (each is long there and its code runs under the
+# sanitizers in shorter tests):
+# - Backend.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold: a 39,304-row reference solve,
+#   180 s under ASan; the cpu backend's kernels and TBB splits run in CpuPanelKernels.* and the
+#   every-backend tests.
+# - NeuralField.ApproximatesTheAnalyticFieldOnHeldOutPoints: an accuracy check of a full training,
+#   44 s; training and inference run in the other NeuralField tests.
+# - CliConform.TinfCanMeasureTheNeuralField: trains a field per P_RENDER_TINF graph, 41 s; the
+#   CLI's training and neural rendering run in CliRender.TrainFieldAndRenderWithIt.
+SAN_EXCLUDE := ^(Backend\.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold|NeuralField\.ApproximatesTheAnalyticFieldOnHeldOutPoints|CliConform\.TinfCanMeasureTheNeuralField)$$
 san-tests:
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(SAN) --output-on-failure -j $(JOBS) -LE "slow|install|browser" -E '$(SAN_EXCLUDE)' --timeout 1800
