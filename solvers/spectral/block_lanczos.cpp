@@ -37,7 +37,7 @@ void apply_compact(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& o
 
 template <class Scalar>
 void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, Cols xs, Cols ys,
-                    std::span<double> lambda, std::span<double> residual) {
+                    std::uint32_t trivial, std::span<double> lambda, std::span<double> residual) {
   const std::size_t k = xs.size();
   for (std::size_t c = 0; c < k; ++c)
     if (xs[c] != xs[0] + c || ys[c] != ys[0] + c) throw std::invalid_argument("rayleigh_block: columns must be runs");
@@ -45,10 +45,13 @@ void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& 
   for (std::size_t c = 0; c < k; ++c) {
     const double xx = ops.dot(p, xs[c], xs[c]), xy = ops.dot(p, xs[c], ys[c]);
     lambda[c] = xy / xx;
-    // r = L x - lambda x with one rounding per entry, then ||r|| / ||x|| (R1-SPEC-061).
-    const std::uint32_t out[1] = {ys[c]}, term[1] = {xs[c]};
+    // r = L x - lambda x with one rounding per entry, then r - t <t, r> / <t, t> the same way,
+    // then ||r|| / ||x|| (R1-SPEC-061).
+    const std::uint32_t out[1] = {ys[c]}, term[1] = {xs[c]}, t_col[1] = {trivial};
     const double coef[1] = {-lambda[c]};
     ops.combine(p, out, out, term, coef);
+    const double t_coef[1] = {-(ops.dot(p, trivial, ys[c]) / ops.dot(p, trivial, trivial))};
+    ops.combine(p, out, out, t_col, t_coef);
     residual[c] = std::sqrt(ops.dot(p, ys[c], ys[c]) / xx);
   }
 }
@@ -424,7 +427,7 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
       while (len < b_ && nl + len < kk && estimate[nl + len] <= tol) ++len;
       if (len == 0) break;
       std::vector<double> lam(len), res(len);
-      rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(nl), len), col_run(scratch_, len), lam, res);
+      rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(nl), len), col_run(scratch_, len), 0, lam, res);
       matvecs_ += static_cast<std::uint32_t>(len);
       ++passes_;
       for (std::size_t i = 0; i < len; ++i) {
@@ -450,7 +453,7 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
       for (std::size_t i = nl; i < kk; i += b_) {
         const std::size_t len = std::min(b_, kk - i);
         std::vector<double> lam(len), res(len);
-        rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(i), len), col_run(scratch_, len), lam, res);
+        rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(i), len), col_run(scratch_, len), 0, lam, res);
         matvecs_ += static_cast<std::uint32_t>(len);
         ++passes_;
         for (std::size_t j = 0; j < len; ++j) offer(base_ + static_cast<Col>(i + j), lam[j], res[j]);
@@ -527,9 +530,9 @@ template std::vector<std::vector<fx::Q32>> start_block(const SpectralOperator<fx
 template std::vector<std::vector<double>> start_block(const SpectralOperator<double>&, const PanelOps<double>&,
                                                       std::span<const double>, const BlockLanczosConfig&);
 template void rayleigh_block(const SpectralOperator<fx::Q32>&, const PanelOps<fx::Q32>&, Panel<fx::Q32>&, Cols, Cols,
-                             std::span<double>, std::span<double>);
+                             std::uint32_t, std::span<double>, std::span<double>);
 template void rayleigh_block(const SpectralOperator<double>&, const PanelOps<double>&, Panel<double>&, Cols, Cols,
-                             std::span<double>, std::span<double>);
+                             std::uint32_t, std::span<double>, std::span<double>);
 template LanczosOutcome<fx::Q32> block_lanczos(const SpectralOperator<fx::Q32>&, const PanelOps<fx::Q32>&,
                                                std::span<const fx::Q32>, const BlockLanczosConfig&, const ProgressFn&);
 template LanczosOutcome<double> block_lanczos(const SpectralOperator<double>&, const PanelOps<double>&,

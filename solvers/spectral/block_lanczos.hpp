@@ -53,9 +53,11 @@ struct LanczosOutcome {
 
 // The exact Rayleigh quotients and residuals of the columns xs (R1-SPEC-061) in one block
 // application, using the columns ys (as many, both runs contiguous and ascending) as scratch.
+// The residual is taken in the complement of the trivial vector, panel column `trivial`: the
+// solver's space (R1-SPEC-020), where the rounded operator's imperfect null vector leaves no floor.
 template <class Scalar>
 void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, Cols xs, Cols ys,
-                    std::span<double> lambda, std::span<double> residual);
+                    std::uint32_t trivial, std::span<double> lambda, std::span<double> residual);
 
 // `trivial` is D^(1/2) 1 with unit scaled length in the panel's units (R1-SPEC-006, R1-SPEC-011).
 template <class Scalar>

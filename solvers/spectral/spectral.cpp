@@ -57,7 +57,8 @@ double output_units(double*, int) { return 1.0; }
 // direction removed by a Householder reflection, cyclic Jacobi on the (n-1) x (n-1) rest.
 template <class Scalar>
 std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops,
-                                           std::uint32_t want, std::uint32_t& matvecs, std::uint32_t& passes) {
+                                           std::span<const Scalar> trivial, std::uint32_t want, std::uint32_t& matvecs,
+                                           std::uint32_t& passes) {
   const std::size_t n = op.n;
   const Graph& gr = *op.graph;
   std::vector<double> a(n * n, 0.0);
@@ -105,7 +106,8 @@ std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, c
   // Entries scaled to squared length 2^e like the Lanczos vectors (R1-SPEC-011); the Rayleigh
   // quotients and residuals in one block application (columns 0..want-1, scratch after them).
   const double root = std::sqrt(std::ldexp(1.0, op.e));
-  Panel<Scalar> p(n, 2 * std::size_t{want});
+  Panel<Scalar> p(n, 2 * std::size_t{want} + 1);
+  p.set_column(2 * std::size_t{want}, trivial);
   for (std::uint32_t c = 0; c < want; ++c)
     for (std::size_t i = 0; i < n; ++i) {
       double u = 0;
@@ -118,7 +120,7 @@ std::vector<Eigenpair<Scalar>> dense_pairs(const SpectralOperator<Scalar>& op, c
     ys[c] = want + c;
   }
   std::vector<double> lambda(want), residual(want);
-  spectral::rayleigh_block<Scalar>(op, ops, p, xs, ys, lambda, residual);
+  spectral::rayleigh_block<Scalar>(op, ops, p, xs, ys, 2 * want, lambda, residual);
   matvecs += want;
   ++passes;
   std::vector<Eigenpair<Scalar>> pairs;
@@ -155,7 +157,7 @@ Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, con
   const std::uint32_t want = std::min<std::uint32_t>(kWant, g.n - 1);
   std::vector<Eigenpair<Scalar>> pairs;
   if (g.n - 1 <= kDenseMax) {
-    pairs = dense_pairs(op, ops, want, out.matvecs, out.passes);
+    pairs = dense_pairs(op, ops, std::span<const Scalar>(trivial), want, out.matvecs, out.passes);
   } else {
     const spectral::BlockLanczosConfig cfg = spectral::canonical_config(g.n, want, params, kSpectralSeed);
     auto lz = spectral::block_lanczos<Scalar>(op, ops, trivial, cfg, progress);
