@@ -35,11 +35,14 @@ std::uint32_t corner_index(std::uint32_t x, std::uint32_t y, std::uint32_t z, st
   return (x ^ (y * kPrime1) ^ (z * kPrime2)) & (table - 1);
 }
 
-// Where a point falls at every level: 8 corner entries and weights each (R1-NRF-002).
-struct Encoding {
-  std::vector<std::uint32_t> index;  // levels x 8, absolute offsets into grid (entry * 2)
-  std::vector<float> weight;         // levels x 8
-  std::vector<float> mask;           // levels: the fade of levels finer than the kernel
+// Where a point falls at every level (R1-NRF-002), in arrays the caller owns: `index` levels x 8
+// absolute offsets into the grid (entry * 2), `weight` levels x 8 trilinear weights, `mask`
+// levels fades of the levels finer than the kernel. It depends on the query only, so training
+// locates each sample once.
+struct Location {
+  std::uint32_t* index;
+  float* weight;
+  float* mask;
 };
 
 double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
@@ -67,11 +70,8 @@ Query make_query(const NeuralField& f, const Vec3& x_in, double sigma) {
   return q;
 }
 
-void encode(const NeuralField& f, const Query& q, Encoding& e, float* features) {
+void locate(const NeuralField& f, const Query& q, const Location& e) {
   const std::uint32_t L = f.config.levels, table = 1u << f.config.log2_table;
-  e.index.resize(L * 8);
-  e.weight.resize(L * 8);
-  e.mask.resize(L);
   for (std::uint32_t l = 0; l < L; ++l) {
     const std::uint32_t res = f.resolution[l];
     std::uint32_t i0[3];
@@ -82,25 +82,35 @@ void encode(const NeuralField& f, const Query& q, Encoding& e, float* features) 
       i0[k] = static_cast<std::uint32_t>(fl);
       fr[k] = p - fl;
     }
-    float a = 0, b = 0;
     for (std::uint32_t c = 0; c < 8; ++c) {
       const std::uint32_t dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
       const double w = (dx ? fr[0] : 1 - fr[0]) * (dy ? fr[1] : 1 - fr[1]) * (dz ? fr[2] : 1 - fr[2]);
-      const std::uint32_t idx = (l * table + corner_index(i0[0] + dx, i0[1] + dy, i0[2] + dz, res, table)) * kNeuralFeatures;
-      e.index[l * 8 + c] = idx;
+      e.index[l * 8 + c] = (l * table + corner_index(i0[0] + dx, i0[1] + dy, i0[2] + dz, res, table)) * kNeuralFeatures;
       e.weight[l * 8 + c] = static_cast<float>(w);
-      a += static_cast<float>(w) * f.grid[idx];
-      b += static_cast<float>(w) * f.grid[idx + 1];
     }
     // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, (2 h / sigma)^2) for cells
     // of side h, so a wide kernel reads only the coarse levels that can hold its smooth field.
     const double fade = 2.0 / (res * q.sigma);
-    const float mask = static_cast<float>(std::min(1.0, fade * fade));
-    e.mask[l] = mask;
-    features[2 * l] = mask * a;
-    features[2 * l + 1] = mask * b;
+    e.mask[l] = static_cast<float>(std::min(1.0, fade * fade));
   }
-  features[2 * L] = static_cast<float>(q.t);
+}
+
+// The network's input row: each level's two features, trilinear over its corners and faded, then
+// the tau feature.
+void gather(const NeuralField& f, const Location& e, double t, float* features) {
+  const std::uint32_t L = f.config.levels;
+  for (std::uint32_t l = 0; l < L; ++l) {
+    float a = 0, b = 0;
+    for (std::uint32_t c = 0; c < 8; ++c) {
+      const float w = e.weight[l * 8 + c];
+      const std::uint32_t idx = e.index[l * 8 + c];
+      a += w * f.grid[idx];
+      b += w * f.grid[idx + 1];
+    }
+    features[2 * l] = e.mask[l] * a;
+    features[2 * l + 1] = e.mask[l] * b;
+  }
+  features[2 * L] = static_cast<float>(t);
 }
 
 using Mat = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -181,9 +191,16 @@ float init_uniform(std::uint64_t seed, std::uint64_t item, std::uint64_t dim, do
 
 FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
   thread_local Mat X, H1, H2, O;
-  thread_local Encoding e;
+  thread_local std::vector<std::uint32_t> index;
+  thread_local std::vector<float> weight, mask;
+  index.resize(config.levels * 8);
+  weight.resize(config.levels * 8);
+  mask.resize(config.levels);
+  const Location e{index.data(), weight.data(), mask.data()};
   X.resize(1, inputs());
-  encode(*this, make_query(*this, x, sigma), e, X.row(0).data());
+  const Query q = make_query(*this, x, sigma);
+  locate(*this, q, e);
+  gather(*this, e, q.t, X.row(0).data());
   forward(*this, X, H1, H2, O);
   return decode_outputs(*this, O.row(0).data(), sigma);
 }
@@ -322,6 +339,17 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     for (std::uint32_t k = 0; k < kNeuralOutputs; ++k) head_weight[k] = 1.0 / std::max(var[k], 1e-6);
   }
 
+  // Where every sample falls in the grid, once: it depends on the sample only.
+  const std::size_t corners = static_cast<std::size_t>(c.levels) * 8;
+  std::vector<std::uint32_t> loc_index(c.samples * corners);
+  std::vector<float> loc_weight(c.samples * corners), loc_mask(static_cast<std::size_t>(c.samples) * c.levels);
+  auto location = [&](std::size_t k) {
+    return Location{loc_index.data() + k * corners, loc_weight.data() + k * corners, loc_mask.data() + k * c.levels};
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c.samples, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) locate(f, set[k].q, location(k));
+  });
+
   // Training (R1-NRF-011): batches in set order; per chunk of kChunk points one pass of matrix
   // products forward and back, gradients reduced in chunk order; Adam on the MLP and on the grid
   // entries a batch touched.
@@ -333,17 +361,23 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   std::vector<float> grid_grad(f.grid.size(), 0.0f);
   std::vector<std::uint8_t> touched(f.grid.size() / kNeuralFeatures, 0);
   const std::uint32_t chunks = (c.batch + kChunk - 1) / kChunk;
-  // The grid is stepped in fixed index ranges, each range applying the chunks' entries in it in
-  // chunk order; a chunk files its entries by range as it makes them.
-  constexpr std::size_t kRanges = 64;
-  const std::size_t entries = f.grid.size() / kNeuralFeatures, per_range = (entries + kRanges - 1) / kRanges;
+  // The grid is stepped level by level (each level's entries its own slice of the table): a level
+  // adds the chunks' contributions to it in chunk order, each chunk's in point and corner order,
+  // then steps the entries it touched. A chunk stores its contributions by level as it makes them.
+  struct Contribution {
+    std::uint32_t idx;
+    float g[2];
+  };
   struct ChunkGrad {
     std::vector<float> mlp;
-    std::array<std::vector<std::pair<std::uint32_t, std::array<float, 2>>>, kRanges> grid;
+    std::vector<Contribution> grid;  // levels x (kChunk points x 8 corners)
     double loss = 0;
   };
   std::vector<ChunkGrad> cg(chunks);
-  for (ChunkGrad& g : cg) g.mlp.resize(n_mlp);
+  for (ChunkGrad& g : cg) {
+    g.mlp.resize(n_mlp);
+    g.grid.resize(static_cast<std::size_t>(c.levels) * kChunk * 8);
+  }
   // The MLP's parameters in gradient order (w1, b1, w2, b2, w3, b3, as ChunkGrad::mlp holds them).
   std::vector<float*> params;
   params.reserve(n_mlp);
@@ -354,15 +388,13 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
     parallel_chunks(chunks, [&](std::uint32_t chunk) {
       ChunkGrad& g = cg[chunk];
-      for (auto& bucket : g.grid) bucket.clear();
       g.loss = 0;
       const std::uint32_t begin = chunk * kChunk, end = std::min(c.batch, (chunk + 1) * kChunk);
       const Eigen::Index rows = end - begin;
       Mat X(rows, ni), H1, H2, O, dO(rows, kNeuralOutputs);
-      std::vector<Encoding> enc(static_cast<std::size_t>(rows));
       for (Eigen::Index r = 0; r < rows; ++r) {
-        const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % c.samples];
-        encode(f, smp.q, enc[static_cast<std::size_t>(r)], X.row(r).data());
+        const std::size_t k = (first + begin + static_cast<std::uint64_t>(r)) % c.samples;
+        gather(f, location(k), set[k].q.t, X.row(r).data());
       }
       forward(f, X, H1, H2, O);
       // Loss and its gradient at the outputs (means over the batch).
@@ -403,12 +435,12 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
       gB1 = dH1.colwise().sum();
       const Mat dX = dH1 * W1;
       for (Eigen::Index r = 0; r < rows; ++r) {
-        const Encoding& e = enc[static_cast<std::size_t>(r)];
+        const Location e = location((first + begin + static_cast<std::uint64_t>(r)) % c.samples);
         for (std::uint32_t l = 0; l < c.levels; ++l)
           for (std::uint32_t k = 0; k < 8; ++k) {
             const float w = e.weight[l * 8 + k] * e.mask[l];
             const std::uint32_t idx = e.index[l * 8 + k];
-            g.grid[idx / kNeuralFeatures / per_range].push_back({idx, {w * dX(r, 2 * l), w * dX(r, 2 * l + 1)}});
+            g.grid[(l * kChunk + static_cast<std::size_t>(r)) * 8 + k] = {idx, {w * dX(r, 2 * l), w * dX(r, 2 * l + 1)}};
           }
       }
     });
@@ -427,20 +459,23 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
         adam_mlp.step(*params[k], k, gsum);
       }
     });
-    // The grid: each index range adds the chunks' entries that fall in it, in chunk order, then
-    // steps the entries it touched.
-    tbb::parallel_for(std::size_t{0}, kRanges, [&](std::size_t range) {
+    // The grid: each level adds the chunks' contributions to it, in chunk order, then steps the
+    // entries it touched.
+    tbb::parallel_for(std::uint32_t{0}, c.levels, [&](std::uint32_t l) {
       std::vector<std::uint32_t> mine;
-      for (const ChunkGrad& g : cg)
-        for (const auto& [idx, gv] : g.grid[range]) {
-          const std::size_t entry = idx / kNeuralFeatures;
-          if (!touched[entry]) {
-            touched[entry] = 1;
+      for (std::uint32_t chunk = 0; chunk < chunks; ++chunk) {
+        const std::size_t rows = std::min(c.batch, (chunk + 1) * kChunk) - chunk * kChunk;
+        const Contribution* from = cg[chunk].grid.data() + static_cast<std::size_t>(l) * kChunk * 8;
+        for (const Contribution* e = from; e != from + rows * 8; ++e) {
+          const std::uint32_t idx = e->idx;
+          if (!touched[idx / kNeuralFeatures]) {
+            touched[idx / kNeuralFeatures] = 1;
             mine.push_back(idx);
           }
-          grid_grad[idx] += gv[0];
-          grid_grad[idx + 1] += gv[1];
+          grid_grad[idx] += e->g[0];
+          grid_grad[idx + 1] += e->g[1];
         }
+      }
       for (const std::uint32_t idx : mine) {
         for (std::uint32_t q = 0; q < kNeuralFeatures; ++q) {
           adam_grid.step(f.grid[idx + q], idx + q, grid_grad[idx + q]);
