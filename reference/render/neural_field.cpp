@@ -462,26 +462,28 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     // The grid: each level adds the chunks' contributions to it, in chunk order, then steps the
     // entries it touched.
     tbb::parallel_for(std::uint32_t{0}, c.levels, [&](std::uint32_t l) {
-      std::vector<std::uint32_t> mine;
       for (std::uint32_t chunk = 0; chunk < chunks; ++chunk) {
         const std::size_t rows = std::min(c.batch, (chunk + 1) * kChunk) - chunk * kChunk;
         const Contribution* from = cg[chunk].grid.data() + static_cast<std::size_t>(l) * kChunk * 8;
         for (const Contribution* e = from; e != from + rows * 8; ++e) {
           const std::uint32_t idx = e->idx;
-          if (!touched[idx / kNeuralFeatures]) {
-            touched[idx / kNeuralFeatures] = 1;
-            mine.push_back(idx);
-          }
+          touched[idx / kNeuralFeatures] = 1;
           grid_grad[idx] += e->g[0];
           grid_grad[idx + 1] += e->g[1];
         }
       }
-      for (const std::uint32_t idx : mine) {
-        for (std::uint32_t q = 0; q < kNeuralFeatures; ++q) {
-          adam_grid.step(f.grid[idx + q], idx + q, grid_grad[idx + q]);
-          grid_grad[idx + q] = 0.0f;
+      // The level's touched entries in index order (each step is independent of the others): a
+      // linear sweep over the part of the level's slice it can use.
+      const std::size_t res1 = std::size_t{f.resolution[l]} + 1;
+      const std::size_t first_entry = static_cast<std::size_t>(l) * table;
+      const std::size_t end_entry = first_entry + std::min<std::size_t>(table, res1 * res1 * res1);
+      for (std::size_t entry = first_entry; entry < end_entry; ++entry) {
+        if (!touched[entry]) continue;
+        touched[entry] = 0;
+        for (std::size_t q = entry * kNeuralFeatures; q < (entry + 1) * kNeuralFeatures; ++q) {
+          adam_grid.step(f.grid[q], q, grid_grad[q]);
+          grid_grad[q] = 0.0f;
         }
-        touched[idx / kNeuralFeatures] = 0;
       }
     });
     report(progress, "train-field: Adam steps", step, c.steps);
