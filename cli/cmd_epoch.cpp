@@ -17,6 +17,7 @@
 #include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/incremental.hpp"
+#include "r1/reference/input_file.hpp"
 #include "render/content.hpp"
 #include "render/neural_field.hpp"
 #include "render/scene.hpp"
@@ -166,6 +167,11 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   const double read_s = seconds_since(t0);
   Epoch e;
   double previous_s = 0;
+  // What a local update of the neural field needs of the earlier epoch (R1-NRF-050): its field,
+  // and each particle's id and far-field inputs (position, phi, colour).
+  std::optional<render::NeuralField> prev_field;
+  std::vector<hemera::Digest> prev_ids;
+  render::Scene prev_scene;
   if (c.from.empty()) {
     R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
   } else {
@@ -174,6 +180,14 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     R1_ASSIGN(Epoch prev, read_epoch(c.from));
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
+    const std::string prev_nrf = (std::filesystem::path(c.from) / "field.nrf").string();
+    if (c.field && std::filesystem::exists(prev_nrf)) {
+      R1_ASSIGN(const auto in, InputFile::open(prev_nrf));
+      R1_ASSIGN(prev_field, render::decode_neural_field(in->text(), prev_nrf, prev.snapshot_digest));
+      prev_ids = prev.ids;
+      prev_scene = render::make_scene(prev);
+      prev_scene.hierarchy = nullptr;  // the epoch moves on below; only the per-particle arrays are kept
+    }
     uo.force_full = c.full;
     R1_ASSIGN(e, run_epoch_from(std::move(prev), anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
   }
@@ -181,6 +195,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   // Reading and checking the earlier epoch (every file against its digest) is part of the update.
   if (!c.from.empty()) e.timings.insert(e.timings.begin() + 1, {"previous", previous_s});
   EpochWriteOptions wo;
+  std::string field_note;
   if (c.field) {
     // The T-infinity neural field (R1-NRF-030): trained on the epoch's analytic far field, written
     // with the epoch and listed in its manifest.
@@ -188,9 +203,31 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     const render::Scene scene = render::make_scene(e);
     render::NeuralConfig nc;
     nc.steps = c.field_steps;
-    R1_ASSIGN(const render::NeuralField f,
-              render::train_neural_field(scene, nc, render::neural_seed(e.snapshot_digest), progress.sink()));
-    wo.extra.emplace_back("field.nrf", render::encode_neural_field(f, e.snapshot_digest));
+    const std::uint64_t seed = render::neural_seed(e.snapshot_digest);
+    std::optional<render::NeuralField> f;
+    if (prev_field && e.update && e.update->incremental) {
+      const render::SceneChange change = render::scene_change(prev_ids, prev_scene, e.ids, scene);
+      if (change.comparable && change.changed == 0) {
+        f = *prev_field;  // nothing the far field sees moved
+        field_note = "field.nrf carried: no particle's position, phi or colour changed";
+      } else if (change.comparable) {
+        R1_ASSIGN(f, render::update_neural_field(scene, *prev_field, change.lo, change.hi, seed,
+                                                 std::max(1u, nc.samples / 4), std::max(1u, c.field_steps / 4),
+                                                 progress.sink()));
+        field_note = "field.nrf updated locally: " + std::to_string(change.changed) + " particles changed, " +
+                     std::to_string(std::max(1u, c.field_steps / 4)) + " steps in their box (update " +
+                     std::to_string(f->local_updates) + " since the field was trained whole)";
+      } else {
+        field_note = "field.nrf trained whole: " + change.reason;
+      }
+    } else if (c.field && !c.from.empty()) {
+      field_note = prev_field ? "field.nrf trained whole: the positions were solved in full"
+                              : "field.nrf trained whole: the earlier epoch has no field.nrf";
+    }
+    if (!f) {
+      R1_ASSIGN(f, render::train_neural_field(scene, nc, seed, progress.sink()));
+    }
+    wo.extra.emplace_back("field.nrf", render::encode_neural_field(*f, e.snapshot_digest));
     e.timings.push_back({"field", seconds_since(t3)});
   }
   if (content)
@@ -201,6 +238,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   e.timings.push_back({"write", seconds_since(t2)});
   progress.finish();
   if (!c.quiet) print_summary(e, c.out, seconds_since(t0));
+  if (!c.quiet && !field_note.empty()) std::printf("field              %s\n", field_note.c_str());
   if (!c.quiet && content) std::printf("content            %s\n", render::content_summary(*content).c_str());
   return Status::ok();
 }

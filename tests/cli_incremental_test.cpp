@@ -95,6 +95,32 @@ TEST(CliIncremental, KeepLocalKeepsAnUncertifiedUpdateAndSaysSo) {
   EXPECT_EQ(r1::test::read_file(c.d / "kept" / "focus.q32"), r1::test::read_file(c.d / "certified" / "focus.q32"));
 }
 
+// R1-NRF-050: with --field, an incremental epoch updates the earlier epoch's field in the box of
+// the particles that moved (the same bytes twice); a full solve trains it whole.
+TEST(CliIncremental, FieldIsUpdatedLocallyWithTheUpdate) {
+  Chain c;
+  ASSERT_EQ(run_cli({"epoch", c.g.string(), "--field", "--field-steps", "8", "--no-timings", "-q", "-o",
+                     (c.d / "fprev").string()})
+                .exit_code,
+            0);
+  std::string field[2];
+  for (int k = 0; k < 2; ++k) {
+    const fs::path out = c.d / ("finc" + std::to_string(k));
+    const auto r = run_cli({"epoch", c.next.string(), "--from", (c.d / "fprev").string(), "--hops", "3", "--field",
+                            "--field-steps", "8", "--no-timings", "-o", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("field              field.nrf updated locally: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(update 1 since the field was trained whole)"), std::string::npos) << r.out;
+    field[k] = r1::test::read_file(out / "field.nrf");
+  }
+  EXPECT_EQ(field[0], field[1]);
+  EXPECT_NE(field[0], r1::test::read_file(c.d / "fprev" / "field.nrf"));
+  const auto full = run_cli({"epoch", c.next.string(), "--from", (c.d / "fprev").string(), "--full", "--field",
+                             "--field-steps", "8", "--no-timings", "-o", (c.d / "ffull").string()});
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  EXPECT_NE(full.out.find("field.nrf trained whole: the positions were solved in full"), std::string::npos) << full.out;
+}
+
 TEST(CliIncremental, BadInputIsOneLineExitTwoAndNothingWritten) {
   Chain c;
   r1::test::TempDir out;

@@ -218,14 +218,10 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
   return ff;
 }
 
-Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
-                                       const ProgressFn& progress) {
-  if (s.n == 0) return Status::input("train-field: the epoch has no particles");
-  if (!architecture_in_range(c) || c.samples < 1 || c.batch < 1 || c.base_resolution < 1)
-    return Status::input("train-field: configuration out of range");
-  std::unique_ptr<tbb::global_control> limit;
-  if (c.threads > 0)
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, c.threads);
+namespace {
+
+// A new field for scene s: its cube, tau range and resolutions, and the parameters' initial values.
+NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed) {
   NeuralField f;
   f.config = c;
   f.seed = seed;
@@ -265,29 +261,41 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   layer(f.w1, f.b1, nh, ni, 1);
   layer(f.w2, f.b2, nh, nh, 2);
   layer(f.w3, f.b3, kNeuralOutputs, nh, 3);
+  return f;
+}
 
+// The training set (R1-NRF-010): `count` points with the analytic far field's targets.
+std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t count, std::uint64_t data_seed,
+                             std::span<const std::uint32_t> pool, const std::pair<Vec3, Vec3>* box,
+                             const ProgressFn& progress) {
   // The training set (R1-NRF-010): even points uniform in the cube, odd points a Gaussian step of
   // width sigma from a particle drawn uniformly; tau log-uniform in [tau_lo, tau_hi]. Targets from
   // the analytic far field.
+  // Of a local update (R1-NRF-050): positions in `box` (lo, size per axis) and particles from
+  // `pool` (the particles in the box) instead of the cube and every particle.
   const FieldFrame ff = far_field_frame(s);
-  std::vector<Sample> set(c.samples);
-  const std::uint64_t data_seed = seed ^ 0x6e72662d64617461u;  // "nrf-data"
+  std::vector<Sample> set(count);
   constexpr std::uint32_t kTruthChunk = 1024;
-  const std::uint32_t truth_chunks = (c.samples + kTruthChunk - 1) / kTruthChunk;
-  report(progress, "train-field: samples of the analytic field", 0, c.samples);
+  const std::uint32_t truth_chunks = (count + kTruthChunk - 1) / kTruthChunk;
+  report(progress, "train-field: samples of the analytic field", 0, count);
   parallel_chunks(truth_chunks, [&](std::uint32_t chunk) {
-    const std::uint32_t end = std::min(c.samples, (chunk + 1) * kTruthChunk);
+    const std::uint32_t end = std::min(count, (chunk + 1) * kTruthChunk);
     for (std::uint32_t k = chunk * kTruthChunk; k < end; ++k) {
       const double tau = f.tau_lo * std::pow(f.tau_hi / f.tau_lo, rng::uniform_double(data_seed, k, 0));
       const double sigma = std::sqrt(tau);
       Vec3 x;
-      if (k % 2 == 0) {
-        x = f.lo + Vec3{rng::uniform_double(data_seed, k, 1), rng::uniform_double(data_seed, k, 2),
-                        rng::uniform_double(data_seed, k, 3)} * f.size;
+      if (k % 2 == 0 || pool.empty()) {
+        const Vec3 u{rng::uniform_double(data_seed, k, 1), rng::uniform_double(data_seed, k, 2),
+                     rng::uniform_double(data_seed, k, 3)};
+        x = box ? box->first + Vec3{u.x * box->second.x, u.y * box->second.y, u.z * box->second.z} : f.lo + u * f.size;
       } else {
-        const auto p = std::min<std::uint32_t>(
-            s.n - 1, static_cast<std::uint32_t>(rng::uniform_double(data_seed, k, 1) * s.n));
-        x = s.position[p] + Vec3{gaussian(data_seed, k, 4), gaussian(data_seed, k, 6), gaussian(data_seed, k, 8)} * sigma;
+        const auto i = std::min<std::size_t>(
+            pool.size() - 1, static_cast<std::size_t>(rng::uniform_double(data_seed, k, 1) * static_cast<double>(pool.size())));
+        x = s.position[pool[i]] + Vec3{gaussian(data_seed, k, 4), gaussian(data_seed, k, 6), gaussian(data_seed, k, 8)} * sigma;
+        if (box) {
+          const Vec3 top = box->first + box->second;
+          x = Vec3{std::clamp(x.x, box->first.x, top.x), std::clamp(x.y, box->first.y, top.y), std::clamp(x.z, box->first.z, top.z)};
+        }
       }
       const FieldValue v = field_hierarchical(ff, x, sigma);
       Sample& smp = set[k];
@@ -302,8 +310,20 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
       smp.weight_cf = static_cast<float>(std::min(1.0, v.weight));
     }
   });
-  report(progress, "train-field: samples of the analytic field", c.samples, c.samples);
+  report(progress, "train-field: samples of the analytic field", count, count);
+  return set;
+}
 
+
+// Adam on the set (R1-NRF-011): the MLP too when `mlp` (a local update keeps it, R1-NRF-050),
+// its output biases first set to the set's means when `init_biases`.
+void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, std::uint32_t steps, bool mlp, bool init_biases,
+         const ProgressFn& progress) {
+  NeuralConfig c = f.config;
+  c.batch = batch;
+  c.steps = steps;
+  const std::uint32_t table = 1u << c.log2_table, ni = f.inputs(), nh = c.hidden;
+  const auto samples = static_cast<std::uint32_t>(set.size());
   double head_weight[kNeuralOutputs] = {1, 1, 1, 1, 1, 1, 1};
   // The output biases start at the training set's means (R1-NRF-020), in set order: the heads
   // then learn the variation from the first step instead of spending steps on the offset.
@@ -317,12 +337,14 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     }
     mean[0] /= static_cast<double>(set.size());
     for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] = cw > 0 ? mean[k] / cw : 0.0;
-    f.b3[0] = static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
-    for (std::uint32_t k = 1; k <= 3; ++k) {
-      const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
-      f.b3[k] = static_cast<float>(std::log(m / (1 - m)));
+    if (init_biases) {
+      f.b3[0] = static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
+      for (std::uint32_t k = 1; k <= 3; ++k) {
+        const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
+        f.b3[k] = static_cast<float>(std::log(m / (1 - m)));
+      }
+      for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mean[k]);
     }
-    for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mean[k]);
     // Each head's squared error is divided by its targets' variance over the set (R1-NRF-011), so
     // the colour (a few hundredths) weighs as much as the density (a few units) in the loss.
     double var[kNeuralOutputs] = {};
@@ -341,12 +363,12 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
 
   // Where every sample falls in the grid, once: it depends on the sample only.
   const std::size_t corners = static_cast<std::size_t>(c.levels) * 8;
-  std::vector<std::uint32_t> loc_index(c.samples * corners);
-  std::vector<float> loc_weight(c.samples * corners), loc_mask(static_cast<std::size_t>(c.samples) * c.levels);
+  std::vector<std::uint32_t> loc_index(samples * corners);
+  std::vector<float> loc_weight(samples * corners), loc_mask(static_cast<std::size_t>(samples) * c.levels);
   auto location = [&](std::size_t k) {
     return Location{loc_index.data() + k * corners, loc_weight.data() + k * corners, loc_mask.data() + k * c.levels};
   };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c.samples, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k != r.end(); ++k) locate(f, set[k].q, location(k));
   });
 
@@ -393,14 +415,14 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
       const Eigen::Index rows = end - begin;
       Mat X(rows, ni), H1, H2, O, dO(rows, kNeuralOutputs);
       for (Eigen::Index r = 0; r < rows; ++r) {
-        const std::size_t k = (first + begin + static_cast<std::uint64_t>(r)) % c.samples;
+        const std::size_t k = (first + begin + static_cast<std::uint64_t>(r)) % samples;
         gather(f, location(k), set[k].q.t, X.row(r).data());
       }
       forward(f, X, H1, H2, O);
       // Loss and its gradient at the outputs (means over the batch).
       const double scale = 1.0 / c.batch;
       for (Eigen::Index r = 0; r < rows; ++r) {
-        const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % c.samples];
+        const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % samples];
         const double s0 = softplus(static_cast<double>(O(r, 0)));
         const double r0 = s0 - static_cast<double>(smp.target[0]);
         double loss = head_weight[0] * r0 * r0;
@@ -435,7 +457,7 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
       gB1 = dH1.colwise().sum();
       const Mat dX = dH1 * W1;
       for (Eigen::Index r = 0; r < rows; ++r) {
-        const Location e = location((first + begin + static_cast<std::uint64_t>(r)) % c.samples);
+        const Location e = location((first + begin + static_cast<std::uint64_t>(r)) % samples);
         for (std::uint32_t l = 0; l < c.levels; ++l)
           for (std::uint32_t k = 0; k < 8; ++k) {
             const float w = e.weight[l * 8 + k] * e.mask[l];
@@ -452,7 +474,8 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     adam_mlp.begin_step(step, c.lr_mlp);
     adam_grid.begin_step(step, c.lr_grid);
     // The MLP: every parameter's gradient summed over the chunks in chunk order, then its step.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_mlp, 512), [&](const tbb::blocked_range<std::size_t>& range) {
+    if (mlp)
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_mlp, 512), [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         float gsum = 0.0f;
         for (const ChunkGrad& g : cg) gsum += g.mlp[k];
@@ -488,13 +511,83 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
     });
     report(progress, "train-field: Adam steps", step, c.steps);
   }
+}
+
+}  // namespace
+
+Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
+                                       const ProgressFn& progress) {
+  if (s.n == 0) return Status::input("train-field: the epoch has no particles");
+  if (!architecture_in_range(c) || c.samples < 1 || c.batch < 1 || c.base_resolution < 1)
+    return Status::input("train-field: configuration out of range");
+  std::unique_ptr<tbb::global_control> limit;
+  if (c.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, c.threads);
+  NeuralField f = init_field(s, c, seed);
+  std::vector<std::uint32_t> every(s.n);
+  for (std::uint32_t p = 0; p < s.n; ++p) every[p] = p;
+  const std::vector<Sample> set = make_set(s, f, c.samples, seed ^ 0x6e72662d64617461u /* "nrf-data" */, every, nullptr, progress);
+  fit(f, set, c.batch, c.steps, true, true, progress);
+  return f;
+}
+
+SceneChange scene_change(std::span<const hemera::Digest> prev_ids, const Scene& prev, std::span<const hemera::Digest> next_ids,
+                         const Scene& next) {
+  SceneChange c;
+  if (prev_ids.size() != next_ids.size() || prev.n != next.n || next.n != next_ids.size()) {
+    c.reason = "particles were added or dropped (every field weight n phi moves)";
+    return c;
+  }
+  if (!std::equal(prev_ids.begin(), prev_ids.end(), next_ids.begin())) {
+    c.reason = "the particles are in another order";
+    return c;
+  }
+  c.comparable = true;
+  for (std::uint32_t p = 0; p < next.n; ++p) {
+    const Vec3 &a = prev.position[p], &b = next.position[p], &ca = prev.color[p], &cb = next.color[p];
+    if (a.x == b.x && a.y == b.y && a.z == b.z && prev.phi[p] == next.phi[p] && ca.x == cb.x && ca.y == cb.y && ca.z == cb.z)
+      continue;
+    if (c.changed++ == 0) c.lo = c.hi = a;
+    for (const Vec3& x : {a, b}) {
+      c.lo = Vec3{std::min(c.lo.x, x.x), std::min(c.lo.y, x.y), std::min(c.lo.z, x.z)};
+      c.hi = Vec3{std::max(c.hi.x, x.x), std::max(c.hi.y, x.y), std::max(c.hi.z, x.z)};
+    }
+  }
+  return c;
+}
+
+Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev, const Vec3& lo, const Vec3& hi,
+                                        std::uint64_t seed, std::uint32_t samples, std::uint32_t steps,
+                                        const ProgressFn& progress) {
+  if (s.n == 0) return Status::input("train-field: the epoch has no particles");
+  if (samples < 1 || steps < 1) return Status::input("train-field: configuration out of range");
+  NeuralField f = prev;
+  f.seed = seed;
+  ++f.local_updates;
+  // The box: the changed particles' box grown by the finest kernel's reach, inside the cube.
+  const double grow = 3 * std::sqrt(f.tau_lo);
+  const Vec3 cube_hi = f.lo + Vec3{f.size, f.size, f.size};
+  const Vec3 b_lo{std::max(lo.x - grow, f.lo.x), std::max(lo.y - grow, f.lo.y), std::max(lo.z - grow, f.lo.z)};
+  const Vec3 b_hi{std::min(hi.x + grow, cube_hi.x), std::min(hi.y + grow, cube_hi.y), std::min(hi.z + grow, cube_hi.z)};
+  if (!(b_lo.x < b_hi.x && b_lo.y < b_hi.y && b_lo.z < b_hi.z)) return Status::input("train-field: the update box is empty");
+  f.update_lo = b_lo;
+  f.update_hi = b_hi;
+  const std::pair<Vec3, Vec3> box{b_lo, b_hi - b_lo};
+  std::vector<std::uint32_t> pool;
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    const Vec3& x = s.position[p];
+    if (x.x >= b_lo.x && x.x <= b_hi.x && x.y >= b_lo.y && x.y <= b_hi.y && x.z >= b_lo.z && x.z <= b_hi.z) pool.push_back(p);
+  }
+  std::vector<Sample> set = make_set(s, f, samples, seed ^ 0x6e72662d64617461u, pool, &box, progress);
+  fit(f, set, std::min(f.config.batch, samples), steps, false, false, progress);
   return f;
 }
 
 // ---- file (R1-NRF-030) ------------------------------------------------------------------------
 
 namespace {
-constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\1'};
+constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\2'};
+constexpr char kMagicV1[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\1'};
 void put_floats(std::string& out, const std::vector<float>& v) {
   for (const float x : v) format::put_f32(out, x);
 }
@@ -513,6 +606,9 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
                          f.loss_first, f.loss_last})
     format::put_f64(out, v);
   format::put_u64(out, f.seed);
+  format::put_u32(out, f.local_updates);
+  for (const double v : {f.update_lo.x, f.update_lo.y, f.update_lo.z, f.update_hi.x, f.update_hi.y, f.update_hi.z})
+    format::put_f64(out, v);
   for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
   format::put_bytes(out, d);
@@ -522,8 +618,10 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
 Result<NeuralField> decode_neural_field(std::string_view bytes, const std::string& name,
                                         std::span<const std::uint8_t> snapshot) {
   const std::size_t kDigest = sizeof(hemera::Digest);
-  if (bytes.size() < sizeof kMagic + kDigest || bytes.substr(0, sizeof kMagic) != std::string_view(kMagic, sizeof kMagic))
-    return Status::input(name + ": not an r1 neural field (r1-nrf version 1)");
+  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1 or 2)");
+  const bool v1 = bytes.substr(0, sizeof kMagic) == std::string_view(kMagicV1, sizeof kMagicV1);
+  if (!v1 && bytes.substr(0, sizeof kMagic) != std::string_view(kMagic, sizeof kMagic))
+    return Status::input(name + ": not an r1 neural field (r1-nrf version 1 or 2)");
   const std::string_view body = bytes.substr(0, bytes.size() - kDigest);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(body.data()), body.size()));
   if (!std::equal(d.begin(), d.end(), reinterpret_cast<const std::uint8_t*>(bytes.data() + body.size())))
@@ -550,6 +648,11 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
       !std::isfinite(f.centroid.x) || !std::isfinite(f.centroid.y) || !std::isfinite(f.centroid.z))
     return r.error("bad cube or tau range");
   if (!r.u64(f.seed)) return r.error("truncated");
+  if (!v1) {
+    if (!r.u32(f.local_updates)) return r.error("truncated");
+    for (double* v : {&f.update_lo.x, &f.update_lo.y, &f.update_lo.z, &f.update_hi.x, &f.update_hi.y, &f.update_hi.z})
+      if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad update box");
+  }
   const std::uint32_t ni = f.inputs(), nh = c.hidden;
   const std::size_t sizes[7] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,
                                 static_cast<std::size_t>(nh) * ni, nh,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "field.hpp"
+#include "r1/fixedpoint/hemera.hpp"
 #include "r1/spec/progress.hpp"
 #include "r1/spec/status.hpp"
 
@@ -46,6 +47,10 @@ struct NeuralField {
   std::vector<float> grid;                // levels x 2^log2_table x 2
   std::vector<float> w1, b1, w2, b2, w3, b3;  // row-major: w1 is hidden x inputs
   double loss_first = 0, loss_last = 0;   // mean training loss of the first and last step
+  // Local updates since the field was trained whole (R1-NRF-050), and the last one's box (zero
+  // when none).
+  std::uint32_t local_updates = 0;
+  Vec3 update_lo, update_hi;
 
   std::uint32_t inputs() const { return config.levels * kNeuralFeatures + 1; }
   // The field at x with kernel width sigma (tau = sigma^2), as field_hierarchical returns it
@@ -59,6 +64,26 @@ std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest);
 // Trains the field of a scene from its analytic far field (every particle at field weight n phi).
 Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
                                        const ProgressFn& progress = {});
+
+// A local update for an incremental epoch (R1-NRF-050): `prev`, trained for the earlier epoch, is
+// trained further on `samples` points of scene s inside the box [lo, hi] (the changed particles'
+// box, grown by the finest kernel's reach and kept inside the cube) for `steps` Adam steps. Only
+// grid entries those points reach receive gradient; the MLP, the cube and the tau range stay.
+Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev, const Vec3& lo, const Vec3& hi,
+                                        std::uint64_t seed, std::uint32_t samples, std::uint32_t steps,
+                                        const ProgressFn& progress = {});
+
+// What changed for the far field between two epochs of a chain (R1-NRF-050): comparable when
+// both have the same particles in the same order (else `reason` says why not); `changed` counts
+// the particles whose position, phi or colour differ, [lo, hi] bounds their old and new positions.
+struct SceneChange {
+  bool comparable = false;
+  std::string reason;
+  std::size_t changed = 0;
+  Vec3 lo, hi;
+};
+SceneChange scene_change(std::span<const hemera::Digest> prev_ids, const Scene& prev, std::span<const hemera::Digest> next_ids,
+                         const Scene& next);
 
 // The analytic far field the field is trained on: every node at its scene aggregate.
 FieldFrame far_field_frame(const Scene& s, const FieldParams& p = {});

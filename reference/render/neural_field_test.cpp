@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "r1/fixedpoint/counter_rng.hpp"
@@ -100,6 +104,91 @@ TEST(NeuralField, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
     spread += std::fabs(truth[k] - mean);
   }
   EXPECT_LT(err, 0.5 * spread) << "mean |error| " << err / truth.size() << " against spread " << spread / truth.size();
+}
+
+// R1-NRF-050: a local update moves only grid entries at the corners of cells that meet its box
+// (the hash of R1-NRF-002 written out here from the spec), keeps the MLP, the cube and the tau
+// range bit for bit, is the same bytes on one thread and on all, and brings the field at the
+// moved particles toward the new analytic field.
+TEST(NeuralField, LocalUpdateStepsOnlyTheCellsOfItsBox) {
+  r1::Epoch e = blob_epoch(400);
+  const Scene before = make_scene(e);
+  NeuralConfig c = small_config();
+  c.steps = 60;
+  auto prev = train_neural_field(before, c, 3);
+  ASSERT_TRUE(prev.is_ok());
+  // Move the first blob's particles (every fourth) 120 units along x.
+  for (std::size_t p = 0; p < e.frame.position.size(); p += 4)
+    e.frame.position[p][0] = Q32::from_raw(e.frame.position[p][0].raw + (std::int64_t{120} << 32));
+  const Scene after = make_scene(e);
+  const std::vector<r1::hemera::Digest> ids(e.ids.begin(), e.ids.end());
+  const SceneChange change = scene_change(ids, before, ids, after);
+  ASSERT_TRUE(change.comparable);
+  EXPECT_EQ(change.changed, 100u);
+  auto one_thread = [&] {
+    auto limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
+    return update_neural_field(after, *prev, change.lo, change.hi, 11, 1u << 11, 40);
+  };
+  auto upd = update_neural_field(after, *prev, change.lo, change.hi, 11, 1u << 11, 40);
+  auto upd1 = one_thread();
+  ASSERT_TRUE(upd.is_ok() && upd1.is_ok()) << upd.status().message();
+  EXPECT_EQ(encode_neural_field(*upd, digest_of(e)), encode_neural_field(*upd1, digest_of(e)));
+  EXPECT_EQ(upd->local_updates, 1u);
+  EXPECT_TRUE(upd->w1 == prev->w1 && upd->b1 == prev->b1 && upd->w2 == prev->w2 && upd->b2 == prev->b2 &&
+              upd->w3 == prev->w3 && upd->b3 == prev->b3);
+  EXPECT_EQ(upd->size, prev->size);
+  EXPECT_EQ(upd->tau_hi, prev->tau_hi);
+  // The entries a point of the box can reach: every corner of every cell the box meets.
+  const std::uint32_t table = 1u << c.log2_table;
+  std::vector<char> reachable(prev->grid.size() / 2, 0);
+  const double lo[3] = {upd->update_lo.x, upd->update_lo.y, upd->update_lo.z};
+  const double hi[3] = {upd->update_hi.x, upd->update_hi.y, upd->update_hi.z};
+  const double base[3] = {prev->lo.x, prev->lo.y, prev->lo.z};
+  for (std::uint32_t l = 0; l < c.levels; ++l) {
+    const std::uint32_t res = prev->resolution[l];
+    std::uint32_t a[3], b[3];
+    for (int k = 0; k < 3; ++k) {
+      auto cell = [&](double v) {
+        return std::min<std::uint32_t>(res - 1, static_cast<std::uint32_t>(std::floor(std::clamp((v - base[k]) / prev->size, 0.0, 1.0) * res)));
+      };
+      a[k] = cell(lo[k]);
+      b[k] = cell(hi[k]) + 1;
+    }
+    const std::uint64_t side = std::uint64_t{res} + 1;
+    for (std::uint32_t z = a[2]; z <= b[2]; ++z)
+      for (std::uint32_t y = a[1]; y <= b[1]; ++y)
+        for (std::uint32_t x = a[0]; x <= b[0]; ++x) {
+          const std::uint32_t entry = side * side * side <= table ? static_cast<std::uint32_t>(x + side * (y + side * z))
+                                                                  : (x ^ (y * 2654435761u) ^ (z * 805459861u)) & (table - 1);
+          reachable[l * table + entry] = 1;
+        }
+  }
+  std::size_t moved = 0, outside = 0;
+  for (std::size_t k = 0; k < prev->grid.size(); ++k) {
+    if (upd->grid[k] == prev->grid[k]) continue;
+    ++moved;
+    if (!reachable[k / 2]) ++outside;
+  }
+  EXPECT_GT(moved, 0u);
+  EXPECT_EQ(outside, 0u);
+  // At the moved particles (sigma 40) the updated field is closer to the new analytic one.
+  const FieldFrame ff = far_field_frame(after);
+  double err_prev = 0, err_upd = 0;
+  for (std::size_t p = 0; p < after.n; p += 4) {
+    const double want = std::log1p(field_hierarchical(ff, after.position[p], 40).weight);
+    err_prev += std::abs(std::log1p(prev->evaluate(after.position[p], 40).weight) - want);
+    err_upd += std::abs(std::log1p(upd->evaluate(after.position[p], 40).weight) - want);
+  }
+  EXPECT_LT(err_upd, 0.8 * err_prev) << err_upd << " " << err_prev;
+  // The file keeps the count and the box.
+  auto back = decode_neural_field(encode_neural_field(*upd, digest_of(e)), "field.nrf", digest_of(e));
+  ASSERT_TRUE(back.is_ok()) << back.status().message();
+  EXPECT_EQ(back->local_updates, 1u);
+  EXPECT_EQ(back->update_hi.z, upd->update_hi.z);
+  // Particles added or reordered: no local update.
+  std::vector<r1::hemera::Digest> other = ids;
+  std::swap(other[0], other[1]);
+  EXPECT_FALSE(scene_change(ids, before, other, after).comparable);
 }
 
 TEST(NeuralField, FileRoundTripsAndRejectsDamage) {
