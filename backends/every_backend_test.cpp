@@ -15,6 +15,8 @@
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "render/neural_field.hpp"
+#include "render/scene.hpp"
 
 namespace {
 
@@ -152,6 +154,48 @@ TEST_P(EveryBackend, AConformantBackendIsTheReferenceBitForBit) {
     for (std::size_t k = 0; k < a->rgba.size(); ++k) worst = std::max(worst, std::fabs(a->rgba[k] - r->rgba[k]));
     EXPECT_LE(worst, bound->second.max_abs) << bound->second.reason;
   }
+}
+
+// R1-NRF-031 through the backend interface (RenderOptions::neural_field): a conformant backend
+// draws a pure T-infinity frame with the epoch's trained field as the reference does, and that
+// frame is not the analytic field's.
+TEST_P(EveryBackend, AConformantBackendDrawsTheNeuralFieldAsTheReferenceDoes) {
+  const auto skip = skip_bit_for_bit().find(GetParam());
+  if (skip != skip_bit_for_bit().end()) GTEST_SKIP() << GetParam() << ": " << skip->second;
+  const Input in = ba(200);
+  auto e = run_epoch(in.snapshot, in.graph, {});
+  ASSERT_TRUE(e.is_ok());
+  std::string no_device;
+  auto b = backend_or_skip(GetParam(), no_device);
+  if (!no_device.empty()) GTEST_SKIP() << no_device;
+  ASSERT_TRUE(b);
+  render::NeuralConfig c;
+  c.log2_table = 12;
+  c.samples = 1u << 12;
+  c.batch = 1u << 10;
+  c.steps = 10;
+  auto f = render::train_neural_field(render::make_scene(*e), c, 5);
+  ASSERT_TRUE(f.is_ok()) << f.status().message();
+  const std::string bytes = render::encode_neural_field(*f, e->snapshot_digest);
+  render::View v = small_view();
+  v.camera.position = {0, 0, 400000};  // every particle far below a pixel: a pure T-infinity frame
+  render::RenderOptions neural;
+  neural.neural_field = bytes;
+  render::FrameStats st;
+  auto reference = backends::make_backend("reference");
+  ASSERT_TRUE(reference.is_ok());
+  auto want = (*reference)->render(*e, v, neural, &st, {});
+  auto analytic = (*reference)->render(*e, v, {}, nullptr, {});
+  auto got = b->render(*e, v, neural, nullptr, {});
+  ASSERT_TRUE(want.is_ok() && analytic.is_ok() && got.is_ok()) << got.status().message();
+  EXPECT_GT(st.field_neural, 0u);
+  EXPECT_NE(want->rgba, analytic->rgba);
+  EXPECT_EQ(got->rgba, want->rgba);
+  // A field of another snapshot is an error, not a silent analytic frame.
+  render::RenderOptions wrong;
+  const std::string other = render::encode_neural_field(*f, hemera::hash("another snapshot"));
+  wrong.neural_field = other;
+  EXPECT_FALSE(b->render(*e, v, wrong, nullptr, {}).is_ok());
 }
 
 TEST_P(EveryBackend, ANonConformantBackendSaysWhy) {

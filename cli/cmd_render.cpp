@@ -196,13 +196,14 @@ Status run_render(const RenderCliOptions& c) {
   // reference renderer (no backend's passes draw it yet).
   if (c.field != "analytic" && c.field != "neural") return Status::input("render: --field must be analytic or neural");
   render::NeuralField neural;
+  std::string neural_bytes;
   const bool use_neural = c.field == "neural";
   if (use_neural) {
-    if (chosen.name != "reference") return Status::input("render: --field neural is drawn by the reference renderer only (got --backend " + chosen.name + ")");
     const std::string path = field_path(c.dir, c.field_file);
     if (!fs::exists(path)) return Status::input(path + ": no neural field here (make it with r1 train-field " + c.dir + ")");
     R1_ASSIGN(const auto in, InputFile::open(path));
-    R1_ASSIGN(neural, render::decode_neural_field(in->text(), path, e.snapshot_digest));
+    neural_bytes = std::string(in->text());
+    R1_ASSIGN(neural, render::decode_neural_field(neural_bytes, path, e.snapshot_digest));
     scene.neural = &neural;
   }
   // T0 content comes with the epoch (R1-RND-136): drawn by the reference renderer's content pass;
@@ -261,8 +262,12 @@ Status run_render(const RenderCliOptions& c) {
     const ProgressFn rows = [&](std::string_view, std::uint64_t d, std::uint64_t t) {
       if (sink) sink(stage, d, t);
     };
-    Result<render::Image> frame = use_neural || use_content ? render::render_frame(scene, views[k], {}, &st, rows)
-                                             : chosen.backend->render(e, views[k], {}, &st, rows);
+    // The backend draws the neural field too (RenderOptions::neural_field); T0 content only the
+    // reference renderer's content pass draws.
+    render::RenderOptions ro;
+    ro.neural_field = neural_bytes;
+    Result<render::Image> frame = use_content ? render::render_frame(scene, views[k], {}, &st, rows)
+                                              : chosen.backend->render(e, views[k], ro, &st, rows);
     R1_ASSIGN(render::Image img, std::move(frame));
     images.push_back(std::move(img));
     stats.push_back(st);

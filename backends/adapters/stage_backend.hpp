@@ -11,6 +11,7 @@
 #include "r1/backends/backend.hpp"
 #include "r1/backends/device.hpp"
 #include "r1/reference/epoch.hpp"
+#include "render/neural_field.hpp"
 #include "render/renderer.hpp"
 #include "render/scene.hpp"
 
@@ -75,6 +76,18 @@ class StageBackend final : public Backend {
     if (!scene_ || !(key_ == key)) {
       scene_ = render::make_scene(e);
       key_ = key;
+      neural_.reset();
+    }
+    // The trained field (R1-NRF-031), decoded once per epoch and set of bytes.
+    scene_->neural = nullptr;
+    if (!o.neural_field.empty()) {
+      if (!neural_ || neural_bytes_ != o.neural_field) {
+        auto f = render::decode_neural_field(o.neural_field, "field.nrf", e.snapshot_digest);
+        if (!f) return f.status();
+        neural_ = std::move(f).value();
+        neural_bytes_ = std::string(o.neural_field);
+      }
+      scene_->neural = &*neural_;
     }
     return render::render_frame(*scene_, v, o, stats, progress, passes_);
   }
@@ -93,6 +106,8 @@ class StageBackend final : public Backend {
   std::unique_ptr<Device> device_;
   std::optional<render::Scene> scene_;
   Key key_;
+  std::optional<render::NeuralField> neural_;
+  std::string neural_bytes_;
 };
 
 

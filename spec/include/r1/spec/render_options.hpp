@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string_view>
 
 namespace r1::render {
 
@@ -20,6 +21,9 @@ struct FieldParams {
 struct RenderOptions {
   FieldParams field;
   bool timings = true;
+  // The bytes of a trained T-infinity field of this epoch (field.nrf, spec/neural.md R1-NRF-030)
+  // to draw pure T-infinity frames with; empty: the analytic field. The caller keeps them alive.
+  std::string_view neural_field;
 };
 
 struct FrameStats {
