@@ -220,7 +220,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
       } else {
         field_note = "field.nrf trained whole: " + change.reason;
       }
-    } else if (c.field && !c.from.empty()) {
+    } else if (!c.from.empty()) {
       field_note = prev_field ? "field.nrf trained whole: the positions were solved in full"
                               : "field.nrf trained whole: the earlier epoch has no field.nrf";
     }

@@ -244,7 +244,8 @@ std::unique_ptr<Backend> make_vulkan_backend() {
           (mode == vk::ImpostorPass::Mode::kRaster ? "a graphics pipeline (a quad per impostor, one indirect draw)"
                                                      : "a compute shader over 16-pixel tiles") +
           " ray-casting in fp64 with the reference's intersections; the T-infinity field and composite a compute shader "
-          "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes on the host); cull, edges, splat "
+          "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes, and frames drawn with the neural "
+          "field, on the host); cull, edges, splat "
           "binning and labels the reference's on the host; " + epoch + " (the reference's bytes)",
       std::move(stages), Domain::kFixedQ32, std::move(passes), std::move(device).value());
 }
