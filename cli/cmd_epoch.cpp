@@ -211,11 +211,12 @@ Status run_epoch_cli(const EpochCliOptions& c) {
         f = *prev_field;  // nothing the far field sees moved
         field_note = "field.nrf carried: no particle's position, phi or colour changed";
       } else if (change.comparable) {
-        R1_ASSIGN(f, render::update_neural_field(scene, *prev_field, change.lo, change.hi, seed,
-                                                 std::max(1u, nc.samples / 4), std::max(1u, c.field_steps / 4),
-                                                 progress.sink()));
+        // A quarter of the samples and steps (R1-NRF-050).
+        const std::uint32_t local_steps = std::max(1u, c.field_steps / 4);
+        R1_ASSIGN(f, render::update_neural_field(scene, *prev_field, change.lo, change.hi, seed, std::max(1u, nc.samples / 4),
+                                                 local_steps, progress.sink()));
         field_note = "field.nrf updated locally: " + std::to_string(change.changed) + " particles changed, " +
-                     std::to_string(std::max(1u, c.field_steps / 4)) + " steps in their box (update " +
+                     std::to_string(local_steps) + " steps in their box (update " +
                      std::to_string(f->local_updates) + " since the field was trained whole)";
       } else {
         field_note = "field.nrf trained whole: " + change.reason;

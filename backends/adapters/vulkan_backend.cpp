@@ -117,22 +117,6 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
   const render::View& v = in.view;
   if (in.splats.tiles_x != (v.width + 15) / 16) return Status::internal("vulkan composite: splat tiles are not 16 pixels");
   render::PixelCompositor host(in);  // builds the frame's field; draws the pixels the device leaves
-  if (host.field().scene->neural != nullptr && host.field().mixed.empty()) {
-    // A frame drawn with the neural field (R1-NRF-031): the host draws every pixel with the
-    // reference's code. The device has no inference pass yet (spec/neural.md R1-NRF-032).
-    const std::size_t all = static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
-    std::vector<float> flow;
-    for (std::size_t k = 0; k < all; ++k) {
-      float f[3] = {0, 0, 0};
-      host.pixel(static_cast<int>(k % static_cast<std::size_t>(v.width)), static_cast<int>(k / static_cast<std::size_t>(v.width)),
-                 &image.rgba[k * 4], f);
-      if (flow.empty() && (f[0] != 0 || f[1] != 0 || f[2] != 0)) flow.assign(all * 3, 0.0f);
-      if (!flow.empty()) std::copy(f, f + 3, flow.begin() + static_cast<std::ptrdiff_t>(k * 3));
-    }
-    if (!flow.empty()) image.flow = std::move(flow);
-    stats.host_pixels = all;
-    return Status::ok();
-  }
   const vk::FieldData fd = field_data(host.field(), v);
   vk::SplatData sd;
   for (const render::Splat& sp : in.splats.splats) {
@@ -152,7 +136,14 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
   }
   std::vector<float> flow;
   std::vector<std::uint32_t> left;
-  R1_TRY(st.composite.draw(camera_of(v, in.frame), fd, sd, opaque, image.rgba, flow, left));
+  if (host.field().scene->neural != nullptr && host.field().mixed.empty()) {
+    // A frame drawn with the neural field (R1-NRF-031): the host draws every pixel with the
+    // reference's code. The device has no inference pass yet (spec/neural.md R1-NRF-032).
+    left.resize(pixels);
+    for (std::size_t k = 0; k < pixels; ++k) left[k] = static_cast<std::uint32_t>(k);
+  } else {
+    R1_TRY(st.composite.draw(camera_of(v, in.frame), fd, sd, opaque, image.rgba, flow, left));
+  }
   stats.host_pixels = left.size();
   for (const std::uint32_t k : left) {
     float f[3] = {0, 0, 0};

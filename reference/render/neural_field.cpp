@@ -314,7 +314,6 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
   return set;
 }
 
-
 // Adam on the set (R1-NRF-011): the MLP too when `mlp` (a local update keeps it, R1-NRF-050),
 // its output biases first set to the set's means when `init_biases`.
 void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, std::uint32_t steps, bool mlp, bool init_biases,
@@ -447,14 +446,17 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
           gW3(g.mlp.data() + nw1 + nh + nw2 + nh, kNeuralOutputs, nh);
       Eigen::Map<Row> gB1(g.mlp.data() + nw1, nh), gB2(g.mlp.data() + nw1 + nh + nw2, nh),
           gB3(g.mlp.data() + nw1 + nh + nw2 + nh + nw3, kNeuralOutputs);
-      gW3.noalias() = dO.transpose() * H2;
-      gB3 = dO.colwise().sum();
+      // The weights' gradients only when the MLP is trained; the grid's need dX alone.
       const Mat dH2 = ((dO * W3).array() * (H2.array() > 0.0f).cast<float>()).matrix();
-      gW2.noalias() = dH2.transpose() * H1;
-      gB2 = dH2.colwise().sum();
       const Mat dH1 = ((dH2 * W2).array() * (H1.array() > 0.0f).cast<float>()).matrix();
-      gW1.noalias() = dH1.transpose() * X;
-      gB1 = dH1.colwise().sum();
+      if (mlp) {
+        gW3.noalias() = dO.transpose() * H2;
+        gB3 = dO.colwise().sum();
+        gW2.noalias() = dH2.transpose() * H1;
+        gB2 = dH2.colwise().sum();
+        gW1.noalias() = dH1.transpose() * X;
+        gB1 = dH1.colwise().sum();
+      }
       const Mat dX = dH1 * W1;
       for (Eigen::Index r = 0; r < rows; ++r) {
         const Location e = location((first + begin + static_cast<std::uint64_t>(r)) % samples);
@@ -474,14 +476,15 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
     adam_mlp.begin_step(step, c.lr_mlp);
     adam_grid.begin_step(step, c.lr_grid);
     // The MLP: every parameter's gradient summed over the chunks in chunk order, then its step.
-    if (mlp)
+    if (mlp) {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_mlp, 512), [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        float gsum = 0.0f;
-        for (const ChunkGrad& g : cg) gsum += g.mlp[k];
-        adam_mlp.step(*params[k], k, gsum);
-      }
-    });
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          float gsum = 0.0f;
+          for (const ChunkGrad& g : cg) gsum += g.mlp[k];
+          adam_mlp.step(*params[k], k, gsum);
+        }
+      });
+    }
     // The grid: each level adds the chunks' contributions to it, in chunk order, then steps the
     // entries it touched.
     tbb::parallel_for(std::uint32_t{0}, c.levels, [&](std::uint32_t l) {
