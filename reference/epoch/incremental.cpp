@@ -390,22 +390,63 @@ Residuals residuals_of(const Sums& sums, std::size_t n, int shift) {
   return out;
 }
 
-// The earlier frame applied to vectors (R1-INC-033): genesis scale, then the recorded similarity.
-Result<std::vector<std::array<Q32, 3>>> frame_positions(const Frame& f, const std::array<std::vector<Q32>, 5>& u,
-                                                        std::size_t n, const std::string& prev_name) {
+// The rows of N_1 outside N_h (h = 0 only): a row i whose own entries did not change (i not
+// touched: its degree and weights are PREV's) differs from PREV's operator row only in the columns
+// of touched particles j, whose degree moved. Its carried numerator moves by
+// -(M_next_ij - M_prev_ij) x_j there (R1-INC-038), exact: no square root for the rest of the row,
+// which on a scale-free graph is a hub's thousands of entries. `touched_rows` holds the rows of N_h;
+// at h >= 1 every neighbour of a touched particle is in N_h and nothing moves here.
+Status move_by_changed_entries(const Graph& g, const Rows& pr, const EditBatch& batch, const RowOperatorQ32& touched_rows, const std::array<std::vector<Q32>, 5>& x, int shift,
+                               std::vector<i128>& image) {
+  const std::vector<std::uint32_t>& nh = touched_rows.rows;
+  const std::int64_t scale = std::int64_t{1} << shift;
+  for (std::size_t r = 0; r < nh.size(); ++r) {
+    const std::uint32_t j = nh[r];
+    if (!std::binary_search(batch.touched.begin(), batch.touched.end(), j)) continue;  // its degree is PREV's
+    for (std::uint64_t k = touched_rows.ptr[r]; k < touched_rows.ptr[r + 1]; ++k) {
+      const std::uint32_t i = touched_rows.col[k];
+      if (std::binary_search(nh.begin(), nh.end(), i)) continue;
+      // i is not touched, so (i, j) is an edge of PREV with the same weight, and j was in PREV.
+      if (batch.prev_of[j] < 0) return Status::internal("incremental update: an untouched particle links to an added one");
+      const std::int64_t w = g.w[g.row_ptr[j] + (k - touched_rows.ptr[r])];
+      const std::int64_t before = spectral::m_entry(w, g.degree[i], pr.degree[static_cast<std::size_t>(batch.prev_of[j])]).raw;
+      const std::int64_t dm = touched_rows.m[k].raw - before;
+      if (dm == 0) continue;
+      for (std::size_t c = 0; c < 5; ++c) image[std::size_t{i} * 5 + c] -= static_cast<i128>(dm) * (x[c][j].raw * scale);
+    }
+  }
+  return Status::ok();
+}
+
+// The earlier frame applied to vectors (R1-INC-033): genesis scale, then the recorded similarity,
+// written into `pos` (n entries) at the particles `at`, or at every particle when `at` is null.
+Status frame_positions(const Frame& f, const std::array<std::vector<Q32>, 5>& u, const std::vector<std::uint32_t>* at,
+                       const std::string& prev_name, std::vector<std::array<Q32, 3>>& pos) {
   const auto scale = Q32::checked_from_double(f.scale);
   if (!scale) return Status::input(prev_name + ": the scale is outside the Q32 range");
-  using Positions = std::vector<std::array<Q32, 3>>;
-  R1_ASSIGN(Positions pos, scaled_positions(u, n, *scale));
-  if (f.alignment.genesis) return pos;
-  auto sim = similarity_of(f.alignment);
-  if (!sim.is_ok()) return sim.status().with_prefix(prev_name + ": ");
-  for (auto& x : pos) {
-    const auto y = apply_similarity(*sim, x);
-    if (!y) return Status::internal("incremental frame: a position leaves the Q32 range");
-    x = *y;
+  std::optional<Result<Similarity>> sim;
+  if (!f.alignment.genesis) {
+    sim.emplace(similarity_of(f.alignment));
+    if (!sim->is_ok()) return sim->status().with_prefix(prev_name + ": ");
   }
-  return pos;
+  const auto place = [&](std::size_t p) -> Status {
+    for (std::size_t c = 0; c < 3; ++c) {
+      const auto x = fx::checked_mul(u[c][p], *scale);
+      if (!x) return Status::internal("incremental frame: a scaled coordinate does not fit Q32");
+      pos[p][c] = *x;
+    }
+    if (!sim) return Status::ok();
+    const auto y = apply_similarity(**sim, pos[p]);
+    if (!y) return Status::internal("incremental frame: a position leaves the Q32 range");
+    pos[p] = *y;
+    return Status::ok();
+  };
+  if (at != nullptr) {
+    for (const std::uint32_t p : *at) R1_TRY(place(p));
+  } else {
+    for (std::size_t p = 0; p < pos.size(); ++p) R1_TRY(place(p));
+  }
+  return Status::ok();
 }
 
 bool same_parameters(const Epoch& prev, const EpochOptions& o) {
@@ -568,7 +609,9 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
   // the rest only through their entries in N_h.
   const std::vector<std::uint32_t> rows = neighbourhood(g, batch.touched, info.hops + 1);
   info.rows = rows.size();
-  const std::vector<std::uint32_t> full_rows = info.hops >= 1 ? nh : neighbourhood(g, batch.touched, 1);
+  // F = N_h: at h >= 1 it holds every particle whose own entries move; at h = 0 (N_h = the touched
+  // particles) the other rows of N_1 change only in their entries of touched columns.
+  const std::vector<std::uint32_t>& full_rows = nh;
   const RowOperatorQ32 next_op = RowOperatorQ32::build(g.row_ptr, g.col, g.w, g.degree, full_rows, options.parallel);
 
   // The exact sums without the rows of N_(h+1) (base): the earlier epoch's with the particles
@@ -582,6 +625,7 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     for (const std::uint32_t p : batch.left) spectral::add_row_sums(prev.spectrum.u, shift, p, &prev.spectrum.image[std::size_t{p} * 5], -1, base);
     for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, base);
     next_op.numerators(out, shift, image, options.parallel);
+    R1_TRY(move_by_changed_entries(g, pr, batch, next_op, out, shift, image));
   } else {
     R1_ASSIGN(const SpectralOperator<Q32> op, spectral_operator_q32(g, options.spectral));
     spectral::image_and_sums(op, out, shift, image, base, options.parallel);
@@ -766,7 +810,15 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
   // The earlier frame, kept (R1-INC-033): outside N_h every position keeps its bits.
   e.frame.scale = prev.frame.scale;
   e.frame.alignment = prev.frame.alignment;
-  R1_ASSIGN(e.frame.position, frame_positions(prev.frame, s.u, n, prev_name));
+  // With the same particles, PREV's positions are taken over and N_h's recomputed: elsewhere the
+  // vectors and the frame are PREV's, so are the bits.
+  if (same_particles && prev.frame.position.size() == n) {
+    e.frame.position = std::move(prev.frame.position);
+    R1_TRY(frame_positions(prev.frame, s.u, &nh, prev_name, e.frame.position));
+  } else {
+    e.frame.position.assign(n, {});
+    R1_TRY(frame_positions(prev.frame, s.u, nullptr, prev_name, e.frame.position));
+  }
   e.timings.push_back({std::string(stage_name(Stage::kFrame)),
                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_focus).count()});
   // Roles from the earlier epoch's betweenness, by particle (R1-INC-037): an added particle has
