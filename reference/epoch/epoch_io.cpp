@@ -19,6 +19,7 @@
 #include "r1/reference/frame.hpp"
 #include "r1/reference/hierarchy.hpp"
 #include "r1/reference/input_file.hpp"
+#include "r1/solvers/focus.hpp"
 
 namespace r1 {
 
@@ -497,6 +498,21 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   for (std::size_t i = 0; i < n; ++i) std::memcpy(e.ids[i].data(), ids.data() + i * 32, 32);
   R1_ASSIGN(const std::string_view focus, files.rows("focus.q32", 8));
   e.focus.phi = read_q32_column(focus, n);
+  if (e.domain == NumericDomain::kQ32) {
+    // What the focus stages leave (R1-FOC-012): raws summing to 2^32, each at least 1. An epoch
+    // that holds it has its cyberank places found here (R1-FOC-070), so that an incremental epoch
+    // from it updates both on its region (R1-INC-051, R1-FOC-072).
+    u128 sum = 0;
+    bool positive = true;
+    for (const Q32 x : e.focus.phi) {
+      positive = positive && x.raw >= 1;
+      sum += static_cast<u128>(x.raw < 0 ? 0 : x.raw);
+    }
+    if (positive && sum == (u128{1} << 32)) {
+      e.focus.on_simplex = true;
+      e.focus.cyberank = cyberank_places(e.focus.phi);
+    }
+  }
   if (files.find("heat.q32")) {
     R1_ASSIGN(const std::string_view heat, files.rows("heat.q32", 8));
     e.focus.heat = read_q32_column(heat, n);

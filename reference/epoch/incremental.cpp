@@ -601,7 +601,6 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
         if (batch.prev_of[i] >= 0)
           std::copy_n(&prev.spectrum.image[static_cast<std::size_t>(batch.prev_of[i]) * 5], 5, &image[i * 5]);
   }
-  std::vector<std::int32_t> where(n, -1);  // per particle: its compact row in N_(h+1), or -1
   carry_s += since(t_carry);
 
   // The rows (R1-INC-038): N_(h+1), the only rows of L~ u the batch and the update change; of them
@@ -638,10 +637,13 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
 
   // M restricted to the columns of N_h, by compact row (ascending columns, as the rows are stored):
   // the transpose of N_h's rows, M being exactly symmetric.
-  for (std::size_t a = 0; a < rows.size(); ++a) where[rows[a]] = static_cast<std::int32_t>(a);
+  // A particle's compact row in N_(h+1) (ascending), found by binary search: no array of n.
+  const auto where = [&rows](std::uint32_t i) {
+    return static_cast<std::size_t>(std::lower_bound(rows.begin(), rows.end(), i) - rows.begin());
+  };
   Local loc;
   loc.inner.assign(rows.size(), 0);
-  for (const std::uint32_t i : nh) loc.inner[static_cast<std::size_t>(where[i])] = 1;
+  for (const std::uint32_t i : nh) loc.inner[where(i)] = 1;
   {
     std::vector<std::uint32_t> row_of(full_rows.size());  // next_op's row of each particle of N_h, by N_h's order
     std::size_t r = 0;
@@ -651,15 +653,15 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     }
     loc.ptr.assign(rows.size() + 1, 0);
     for (std::size_t j = 0; j < nh.size(); ++j)
-      for (std::uint64_t k = next_op.ptr[row_of[j]]; k < next_op.ptr[row_of[j] + 1]; ++k) ++loc.ptr[static_cast<std::size_t>(where[next_op.col[k]]) + 1];
+      for (std::uint64_t k = next_op.ptr[row_of[j]]; k < next_op.ptr[row_of[j] + 1]; ++k) ++loc.ptr[where(next_op.col[k]) + 1];
     for (std::size_t a = 0; a < rows.size(); ++a) loc.ptr[a + 1] += loc.ptr[a];
     loc.col.resize(loc.ptr.back());
     loc.m.resize(loc.ptr.back());
     std::vector<std::uint64_t> fill(loc.ptr.begin(), loc.ptr.end() - 1);
     for (std::size_t j = 0; j < nh.size(); ++j)
       for (std::uint64_t k = next_op.ptr[row_of[j]]; k < next_op.ptr[row_of[j] + 1]; ++k) {
-        const std::uint64_t o = fill[static_cast<std::size_t>(where[next_op.col[k]])]++;
-        loc.col[o] = static_cast<std::uint32_t>(where[nh[j]]);
+        const std::uint64_t o = fill[where(next_op.col[k])]++;
+        loc.col[o] = static_cast<std::uint32_t>(where(nh[j]));
         loc.m[o] = next_op.m[k].raw;
       }
   }
@@ -696,9 +698,9 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     std::vector<std::int64_t> delta(rows.size() * 5, 0);
     for (std::size_t j = 0; j < nh.size(); ++j)
       for (std::size_t c = 0; c < 5; ++c)
-        delta[static_cast<std::size_t>(where[nh[j]]) * 5 + c] = (out[c][nh[j]].raw - start_raw[j * 5 + c]) * scale;
+        delta[where(nh[j]) * 5 + c] = (out[c][nh[j]].raw - start_raw[j * 5 + c]) * scale;
     std::vector<char> in_full(rows.size(), 0);
-    for (const std::uint32_t i : full_rows) in_full[static_cast<std::size_t>(where[i])] = 1;
+    for (const std::uint32_t i : full_rows) in_full[where(i)] = 1;
     for (std::size_t a = 0; a < rows.size(); ++a) {
       if (in_full[a]) continue;
       for (std::uint64_t k = loc.ptr[a]; k < loc.ptr[a + 1]; ++k)
@@ -783,6 +785,8 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     if (same_particles) {
       start.phi = std::move(prev.focus.phi);
       start.heat = std::move(prev.focus.heat);
+      start.cyberank = std::move(prev.focus.cyberank);  // with on_simplex: read_epoch found both
+      start.on_simplex = prev.focus.on_simplex;
     } else {
       start.phi.resize(n);
       for (std::size_t i = 0; i < n; ++i)

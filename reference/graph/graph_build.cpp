@@ -1,6 +1,7 @@
 // The layout graph: exact integer weights, A_sym CSR, A2, directed A0, degrees, components
 // (decision 3, R1-IN-050..058).
 #include "r1/reference/graph_build.hpp"
+#include "r1/solvers/focus.hpp"
 
 #include <boost/multiprecision/cpp_int.hpp>
 
@@ -161,6 +162,8 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
   g.degree.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i)
     for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) g.degree[i] += static_cast<std::uint64_t>(g.w[k]);
+
+  summarise_for_focus(g);  // R1-IN-059
 
   // Components by union-find; ids in order of each component's lowest particle index.
   std::vector<std::uint32_t> parent(n);

@@ -130,6 +130,8 @@ Focus<Scalar> make_result(std::vector<Scalar> phi, const FocusPlan& plan) {
 
 }  // namespace
 
+std::vector<std::uint32_t> cyberank_places(std::span<const Q32> phi) { return rank_by(phi); }
+
 i128 phi_log_phi(Q32 x) { return x.raw < 1 ? 0 : static_cast<i128>(x.raw) * fx::log(x).raw; }
 
 Status validate_tri_kernel_params(const TriKernelParams& p) {
@@ -169,7 +171,7 @@ Result<FocusPlan> plan_focus_steps(const Graph& g, const TriKernelParams& p, dou
   R1_TRY(validate_lambda2(lambda2));
   if (g.n == 0 || g.degree.size() != g.n) return Status::input("focus: the graph has no particles or no degrees");
   return guarded([&]() -> Result<FocusPlan> {
-    const std::uint64_t max_degree = *std::max_element(g.degree.begin(), g.degree.end());
+    const std::uint64_t max_degree = g.summarised() ? g.max_degree : *std::max_element(g.degree.begin(), g.degree.end());
     // ||L|| = 2 max d: the Gershgorin bound on the combinatorial Laplacian (R1-FOC-060).
     const i128 norm_l = 2 * static_cast<i128>(max_degree);
     const Q32 term_d = p.lambda_d * (Q32::one() - p.teleport);
@@ -215,17 +217,38 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
   }
 }
 
+// The places after a local update (R1-FOC-072): when the start's places hold no particle of the
+// region, every other particle has the start's phi and ranked below all of them, so it still does
+// and the places are among the start's and the region's; else one pass over phi.
+std::vector<std::uint32_t> places_after(std::span<const Q32> phi, const std::vector<std::uint32_t>& start_places,
+                                        std::span<const std::uint32_t> region) {
+  const std::size_t places = std::min<std::size_t>(phi.size(), kCyberankPlaces);
+  bool local = start_places.size() == places && places < phi.size();
+  for (std::size_t k = 0; local && k < places; ++k)
+    local = start_places[k] < phi.size() && !std::binary_search(region.begin(), region.end(), start_places[k]);
+  if (!local) return rank_by(phi);
+  std::vector<std::uint32_t> order(start_places);
+  order.insert(order.end(), region.begin(), region.end());
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(places), order.end(),
+                    [&phi](std::uint32_t a, std::uint32_t b) { return phi[a] != phi[b] ? phi[b] < phi[a] : a < b; });
+  order.resize(places);
+  return order;
+}
+
 // Syntropy RNE(sum phi_i ln phi_i + ln n), an exact sum (R1-FOC-071), from `plogp` when the
-// caller has it (R1-INC-054), and cyberank (R1-FOC-070).
+// caller has it (R1-INC-054), and cyberank (R1-FOC-070; from the start's places after a local
+// update, R1-FOC-072).
 Focus<Q32> finish_q32(std::vector<Q32> phi, const FocusPlan& plan, bool parallel,
-                      const std::optional<fx::ExactSum>& plogp = std::nullopt) {
+                      const std::optional<fx::ExactSum>& plogp = std::nullopt,
+                      const std::vector<std::uint32_t>* start_places = nullptr, std::span<const std::uint32_t> region = {}) {
   const auto n = static_cast<std::uint32_t>(phi.size());
   fx::ExactSum j = plogp ? *plogp : plogp_of(phi, parallel);
   Focus<Q32> f = make_result(std::move(phi), plan);
   f.plogp = j;
   j.add(log_count(n));
   f.syntropy = j.round().to_double();
-  f.cyberank = rank_by(std::span<const Q32>(f.phi));
+  f.cyberank = start_places != nullptr ? places_after(f.phi, *start_places, region) : rank_by(std::span<const Q32>(f.phi));
+  f.on_simplex = true;
   return f;
 }
 
@@ -273,13 +296,18 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
         return Status::input("focus update: region entry " + std::to_string(a) + " out of range or out of order");
     std::vector<Q32> phi = std::move(start.phi);
     // The frozen particles keep their raws (each at least 1); the region holds the rest of 2^32
-    // (R1-INC-051). One pass over phi with no array beside it: the raws of at least 1 and the
-    // count of the others, then the region's taken out.
+    // (R1-INC-051). A start known to be on the simplex holds 2^32 with every raw at least 1;
+    // otherwise one pass over phi with no array beside it: the raws of at least 1 and the count of
+    // the others. Then the region's taken out.
     u128 frozen = 0;
     std::uint64_t below = 0;
-    for (const Q32 x : phi) {
-      if (x.raw < 1) ++below;
-      else frozen += static_cast<std::uint64_t>(x.raw);
+    if (start.on_simplex) {
+      frozen = u128{1} << 32;
+    } else {
+      for (const Q32 x : phi) {
+        if (x.raw < 1) ++below;
+        else frozen += static_cast<std::uint64_t>(x.raw);
+      }
     }
     for (const std::uint32_t i : region) {
       if (phi[i].raw < 1) --below;
@@ -299,7 +327,7 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
       if (total != 0)
         return Status::input("focus update: no region, and the start sums to " + std::to_string(static_cast<std::uint64_t>(frozen)) +
                              " raws, not 2^32");
-      Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel, start.plogp);
+      Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel, start.plogp, &start.cyberank, region);
       if (use_h) f.heat = std::move(start.heat);
       return f;
     }
@@ -347,7 +375,7 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
         result_heat[global[a]] = Q32::from_raw(static_cast<std::int64_t>(v));
       }
     }
-    Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel, plogp);
+    Focus<Q32> f = finish_q32(std::move(phi), plan, options.parallel, plogp, &start.cyberank, region);
     f.heat = std::move(result_heat);
     return f;
   });

@@ -3,6 +3,7 @@
 #include "focus_operators.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <string>
 
 #include "apportion.hpp"
@@ -87,6 +88,7 @@ void apportion_rows(const std::vector<std::uint64_t>& ptr, const std::vector<std
 
 // The prior u = apportion(2^32, d) (R1-FOC-011), raws.
 std::vector<std::int64_t> prior_raws(const Graph& g) {
+  if (g.summarised()) return g.prior;
   std::vector<std::int64_t> share(g.n);
   ApportionScratch scratch;
   apportion_into(kOne, g.degree, share, scratch);
@@ -259,13 +261,21 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   for (std::uint32_t a = r; a < count; ++a) ops.pattern_.in_ptr[a + 1] = ops.pattern_.in_ptr[a];
   // The frozen dangling mass: every dangling particle outside R keeps its phi (all of them, less
   // R's, exactly).
-  for (std::uint32_t p = 0; p < g.n; ++p)
-    if (g.out_ptr[p] == g.out_ptr[p + 1]) ops.frozen_dangling_ += phi[p].raw;
+  if (g.summarised()) {
+    for (const std::uint32_t p : g.dangling) ops.frozen_dangling_ += phi[p].raw;
+  } else {
+    for (std::uint32_t p = 0; p < g.n; ++p)
+      if (g.out_ptr[p] == g.out_ptr[p + 1]) ops.frozen_dangling_ += phi[p].raw;
+  }
   for (const std::uint32_t p : region)
     if (g.out_ptr[p] == g.out_ptr[p + 1]) ops.frozen_dangling_ -= phi[p].raw;
-  const std::vector<std::int64_t> prior = prior_raws(g);
   ops.prior_.assign(count, Q32{});
-  for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);
+  if (g.summarised()) {
+    for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(g.prior[region[a]]);
+  } else {
+    const std::vector<std::int64_t> prior = prior_raws(g);
+    for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);
+  }
   ops.set_constants(params, g.n);
   ops.row_ptr_ = rows->row_ptr.data();
   ops.col_ = rows->col.data();
@@ -405,27 +415,42 @@ void OperatorsF64::walk(std::span<const double> x, std::vector<double>& out) con
 
 namespace r1 {
 
+void summarise_for_focus(Graph& g) {
+  g.prior.clear();
+  g.dangling.clear();
+  g.max_degree = 0;
+  if (g.n == 0) return;
+  for (std::uint32_t p = 0; p < g.n; ++p) {
+    g.max_degree = std::max(g.max_degree, g.degree[p]);
+    if (g.out_ptr[p] == g.out_ptr[p + 1]) g.dangling.push_back(p);
+  }
+  g.prior = focus::prior_raws(g);  // computed: `prior` is still empty here
+}
+
 std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint32_t> seeds, std::uint32_t h) {
-  std::vector<char> in(g.n, 0);
+  // Breadth first over sorted sets (no array of n, so the cost is the ball's rows): each hop's
+  // neighbours, less those already in, merged in.
   std::vector<std::uint32_t> all, frontier;
   for (const std::uint32_t s : seeds)
-    if (s < g.n && !in[s]) {
-      in[s] = 1;
-      frontier.push_back(s);
-    }
+    if (s < g.n) frontier.push_back(s);
+  std::sort(frontier.begin(), frontier.end());
+  frontier.erase(std::unique(frontier.begin(), frontier.end()), frontier.end());
   all = frontier;
+  std::vector<std::uint32_t> reached, next, merged;
   for (std::uint32_t hop = 0; hop < h && !frontier.empty(); ++hop) {
-    std::vector<std::uint32_t> next;
+    reached.clear();
     for (const std::uint32_t i : frontier)
-      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
-        if (!in[g.col[k]]) {
-          in[g.col[k]] = 1;
-          next.push_back(g.col[k]);
-        }
-    all.insert(all.end(), next.begin(), next.end());
-    frontier = std::move(next);
+      reached.insert(reached.end(), g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i]),
+                     g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i + 1]));
+    std::sort(reached.begin(), reached.end());
+    reached.erase(std::unique(reached.begin(), reached.end()), reached.end());
+    next.clear();
+    std::set_difference(reached.begin(), reached.end(), all.begin(), all.end(), std::back_inserter(next));
+    merged.clear();
+    std::merge(all.begin(), all.end(), next.begin(), next.end(), std::back_inserter(merged));
+    all.swap(merged);
+    frontier.swap(next);
   }
-  std::sort(all.begin(), all.end());
   return all;
 }
 

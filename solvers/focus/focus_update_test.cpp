@@ -22,6 +22,7 @@ namespace {
 using r1::Graph;
 using r1::Q32;
 using r1::TriKernelParams;
+using r1::u128;
 
 constexpr std::int64_t ONE = std::int64_t{1} << 32;
 
@@ -112,6 +113,70 @@ TEST(FocusUpdate, WholeRegionIsTheFullIteration) {
 // A reweighted link and an added one in a 3000-particle geometric graph: the update on the h-hop
 // region, from the earlier epoch's phi and carried heat, moves phi toward the edited graph's fixed
 // point, more than half the way at h = 4 (L1 distances recorded).
+// The summary build_graph files in the graph (R1-IN-059) against an independent largest-remainder
+// apportionment (u128 quotients, a full sort of the remainders), a scan of the out-rows and of the
+// degrees; and the focus, full and local, gives the same bits with it as without it.
+TEST(FocusUpdate, TheGraphsSummaryIsItsArraysAndChangesNoBit) {
+  for (const auto& [kind, seed] : {std::pair{r1::GenKind::kBa, 4ull}, std::pair{r1::GenKind::kSbm, 5ull}}) {
+    const Graph g = graph_of(generated(kind, 1500, seed));
+    ASSERT_TRUE(g.summarised());
+    u128 total = 0;
+    for (const std::uint64_t d : g.degree) total += d;
+    std::vector<std::int64_t> share(g.n);
+    std::vector<std::pair<u128, std::uint32_t>> rem(g.n);
+    u128 given = 0;
+    for (std::uint32_t i = 0; i < g.n; ++i) {
+      const u128 num = static_cast<u128>(g.degree[i]) << 32;
+      share[i] = static_cast<std::int64_t>(num / total);
+      given += num / total;
+      rem[i] = {num % total, i};
+    }
+    std::sort(rem.begin(), rem.end(), [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
+    for (u128 k = 0; k < (u128{1} << 32) - given; ++k) ++share[rem[static_cast<std::size_t>(k)].second];
+    EXPECT_EQ(g.prior, share);
+    std::vector<std::uint32_t> dangling;
+    for (std::uint32_t i = 0; i < g.n; ++i)
+      if (g.out_ptr[i] == g.out_ptr[i + 1]) dangling.push_back(i);
+    EXPECT_EQ(g.dangling, dangling);
+    EXPECT_EQ(g.max_degree, *std::max_element(g.degree.begin(), g.degree.end()));
+
+    Graph bare = g;
+    bare.prior.clear();
+    bare.dangling.clear();
+    bare.max_degree = 0;
+    ASSERT_FALSE(bare.summarised());
+    TriKernelParams p;
+    const auto full = r1::compute_focus_q32(g, p, 0.2), full_bare = r1::compute_focus_q32(bare, p, 0.2);
+    ASSERT_TRUE(full.is_ok() && full_bare.is_ok());
+    EXPECT_EQ(full->phi, full_bare->phi);
+    EXPECT_EQ(full->steps, full_bare->steps);
+    const std::vector<std::uint32_t> region = r1::neighbourhood(g, {dangling.empty() ? 7u : dangling[0], 40u}, 1);
+    const auto local = r1::update_focus_q32(g, p, 0.2, *full, region), local_bare = r1::update_focus_q32(bare, p, 0.2, *full, region);
+    ASSERT_TRUE(local.is_ok() && local_bare.is_ok());
+    EXPECT_EQ(local->phi, local_bare->phi);
+    EXPECT_EQ(local->heat, local_bare->heat);
+
+    // A start known to be on the simplex, with its places (R1-INC-051, R1-FOC-072), against one
+    // that is not: the same phi, and the places a full ranking of the result finds; with the
+    // region far from the top places (their update is local) and holding the first of them (one
+    // pass over phi).
+    ASSERT_TRUE(full->on_simplex);
+    ASSERT_EQ(full->cyberank, r1::cyberank_places(full->phi));
+    r1::Focus<Q32> unknown = *full;
+    unknown.on_simplex = false;
+    unknown.cyberank.clear();
+    const std::uint32_t low = full->cyberank.size() < g.n ? static_cast<std::uint32_t>(std::min_element(full->phi.begin(), full->phi.end()) - full->phi.begin()) : 0;
+    for (const std::vector<std::uint32_t>& r : {std::vector<std::uint32_t>{low}, r1::neighbourhood(g, {full->cyberank[0]}, 1)}) {
+      const auto known = r1::update_focus_q32(g, p, 0.2, *full, r), plain = r1::update_focus_q32(g, p, 0.2, unknown, r);
+      ASSERT_TRUE(known.is_ok() && plain.is_ok());
+      EXPECT_EQ(known->phi, plain->phi);
+      EXPECT_EQ(known->cyberank, r1::cyberank_places(known->phi));
+      EXPECT_EQ(plain->cyberank, known->cyberank);
+      EXPECT_TRUE(known->on_simplex);
+    }
+  }
+}
+
 TEST(FocusUpdate, ApproachesTheEditedFixedPoint) {
   const r1::Snapshot s = generated(r1::GenKind::kRgg, 3000, 3);
   const Graph g0 = graph_of(s);

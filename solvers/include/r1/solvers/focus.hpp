@@ -56,6 +56,14 @@ std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint
 Result<Focus<double>> compute_focus_f64(const Graph& g, const TriKernelParams& params, double lambda2,
                                         const ProgressFn& progress = {}, const FocusOptions& options = {});
 
+// The first min(n, kCyberankPlaces) particles by phi descending, ties to the lower index
+// (R1-FOC-070): what Focus::cyberank holds.
+std::vector<std::uint32_t> cyberank_places(std::span<const Q32> phi);
+
+// Fills the graph's focus summary (Graph::prior, dangling, max_degree; R1-IN-059) from its
+// degrees and out-rows. n = 0: nothing.
+void summarise_for_focus(Graph& g);
+
 // Checks the ranges of R1-FOC-002 and that the three weights sum to exactly 1.
 Status validate_tri_kernel_params(const TriKernelParams& params);
 

@@ -48,6 +48,10 @@ struct Focus {
   // The first min(n, kCyberankPlaces) particle indices by phi descending, ties by lower index
   // (R1-FOC-070).
   std::vector<std::uint32_t> cyberank;
+  // Q32: phi is known to hold the invariant above (raws summing to exactly 2^32, each at least 1):
+  // set by the focus stages and by read_epoch after checking, so that a local update (R1-INC-051)
+  // need not pass over every particle to find the frozen mass.
+  bool on_simplex = false;
   // Q32: sum_i phi_i fx::log(phi_i), exact (units of 2^-64, R1-FOC-071), which syntropy rounds
   // with ln n added. Carried in the manifest so that an incremental epoch updates it on its
   // region (R1-INC-054); unset in the fp64 domain and for an epoch read without it.

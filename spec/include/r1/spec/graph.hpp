@@ -30,6 +30,14 @@ struct Graph {
   // Weighted degree d_i = sum_j w(i, j), exact (Q32 raw, unsigned: up to (n - 1) * 2^32).
   std::vector<std::uint64_t> degree;
 
+  // What the focus reads of the whole graph (R1-IN-059), so that a local update (R1-INC-050)
+  // passes over no array of n: filled by build_graph. A graph made otherwise leaves `prior` empty
+  // and the focus computes all three from the arrays above.
+  std::vector<std::int64_t> prior;      // the prior apportion(2^32, degree), raws (R1-FOC-011)
+  std::vector<std::uint32_t> dangling;  // particles without out-links, ascending (R1-FOC-021)
+  std::uint64_t max_degree = 0;         // max degree, for ||L|| (R1-FOC-060)
+  bool summarised() const { return n > 0 && prior.size() == n; }
+
   // Connected components of A_sym: ids numbered by their lowest particle index.
   std::vector<std::uint32_t> component;
   std::vector<std::uint32_t> component_size;  // by id
