@@ -251,6 +251,21 @@ RC_GTEST_PROP(FocusApportion, FastPathIsThePlainOneShareForShare, ()) {
   RC_ASSERT(fast == plain);
 }
 
+// Equal weights take a closed form (T / n each, one more for the first T mod n): the plain
+// algorithm's shares at every size, zero weights and totals up to 2^63 included.
+RC_GTEST_PROP(FocusApportion, EqualWeightsAreThePlainShares, ()) {
+  const auto n = *rc::gen::inRange<std::size_t>(1, 6000);
+  const int mode = *rc::gen::inRange(0, 3);
+  const std::uint64_t v = mode == 0 ? 0 : mode == 1 ? std::uint64_t{1} << 32 : *rc::gen::arbitrary<std::uint64_t>() >> 33;
+  const std::vector<std::uint64_t> w(n, v);
+  const std::uint64_t total = *rc::gen::inRange(0, 2) == 0 ? std::uint64_t{1} << 32 : *rc::gen::arbitrary<std::uint64_t>() >> 1;
+  std::vector<std::int64_t> fast(n), plain(n);
+  r1::focus::ApportionScratch a, b;
+  r1::focus::apportion_into(total, w, fast, a);
+  r1::focus::apportion_into_plain(total, w, plain, b);
+  RC_ASSERT(fast == plain);
+}
+
 RC_GTEST_PROP(FocusProjection, ExactSumPositiveIdempotent, ()) {
   const auto n = *rc::gen::inRange<std::size_t>(1, 200);
   std::vector<Q32> v(n);
