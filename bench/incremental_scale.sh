@@ -90,9 +90,9 @@ PY
 import json, sys
 m = json.load(open(sys.argv[1]))
 t, u = m["timings_s"], m["update"]
-ms = {k: 1000 * t.get(k, 0.0) for k in ("spectral", "certificate", "focus", "carry")}
-print("%-9d inc2    %15s   update stages (ms): spectral %.1f, certificate %.1f, focus %.1f, sum %.1f; carry %.1f" % (
+ms = {k: 1000 * t.get(k, 0.0) for k in ("spectral", "certificate", "focus", "frame", "carry")}
+print("%-9d inc2    %15s   update stages (ms): spectral %.2f, certificate %.2f, focus %.2f, frame %.2f, sum %.2f; carry %.2f" % (
     m["snapshot"]["particles"], "%d/%d" % (u["region"], u["rows"]), ms["spectral"], ms["certificate"], ms["focus"],
-    ms["spectral"] + ms["certificate"] + ms["focus"], ms["carry"]))
+    ms["frame"], ms["spectral"] + ms["certificate"] + ms["focus"] + ms["frame"], ms["carry"]))
 PY
 done
