@@ -270,7 +270,8 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     int level;
     std::uint32_t id;
     bool aggregate;
-    double t0, t1;
+    double t0, t1;  // the ray in the node's ball grown by the widest kernel on the ray
+    double u0, u1;  // within that, where a sample can reach the node (empty: u0 > u1)
     NodeField node;
   };
   std::vector<Candidate> cands;
@@ -296,7 +297,17 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     if (t0 > t1) continue;
     const bool aggregate = nd.extent <= p.theta * field_sigma(ff, t0);
     if (aggregate || l == 0) {
-      cands.push_back({l, id, aggregate, t0, t1, nd});
+      // A sample at t <= t1 reaches at most cutoff sigma(t1) (sigma grows with t), so the node
+      // is out of reach outside its ball grown by that much: near nodes leave the active list
+      // where the widest kernel alone kept them (padded against the ball's rounding). [t0, t1]
+      // still sets the strata and the order, so every sample and sum is the same.
+      double u0 = t0, u1 = t1;
+      const double g1 = p.cutoff * field_sigma(ff, t1);
+      if (g1 < grow) {
+        const double r = nd.extent + g1;
+        ray_ball(ray, nd.centroid, r + 1e-6 * (r + length(nd.centroid - ray.o)), u0, u1);
+      }
+      cands.push_back({l, id, aggregate, t0, t1, u0, u1, nd});
       a = std::min(a, t0);
       b = std::max(b, t1);
       continue;
@@ -311,6 +322,13 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
     return x.t0 != y.t0 ? x.t0 < y.t0 : (x.level != y.level ? x.level < y.level : x.id < y.id);
   });
+  // The active list holds the candidates whose [u0, u1] may hold the current sample, in the
+  // order above; they enter by u0.
+  std::vector<const Candidate*> entering;
+  entering.reserve(cands.size());
+  for (const Candidate& c : cands)
+    if (c.u0 <= c.u1) entering.push_back(&c);
+  std::stable_sort(entering.begin(), entering.end(), [](const Candidate* x, const Candidate* y) { return x->u0 < y->u0; });
   std::vector<const Candidate*> active;
   std::size_t next = 0;
   const double delta = (b - a) / p.samples;
@@ -320,13 +338,14 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     const double sigma = field_sigma(ff, t);
     const double inv = 1.0 / (2 * sigma * sigma);
     const double reach = p.cutoff * sigma;
-    while (next < cands.size() && cands[next].t0 <= t) active.push_back(&cands[next++]);
-    std::erase_if(active, [t](const Candidate* c) { return c->t1 < t; });
+    for (; next < entering.size() && entering[next]->u0 <= t; ++next)
+      active.insert(std::upper_bound(active.begin(), active.end(), entering[next]), entering[next]);  // candidate order
+    std::erase_if(active, [t](const Candidate* c) { return c->u1 < t; });
     if (active.empty()) {
       // No node reaches this sample: skip to the stratum of the next entry (exact: such samples
       // add nothing, and every sample's jitter depends only on its own index).
-      if (next == cands.size()) break;
-      const double stratum = std::floor((cands[next].t0 - a) / delta);
+      if (next == entering.size()) break;
+      const double stratum = std::floor((entering[next]->u0 - a) / delta);
       if (stratum > i) i = static_cast<int>(std::min(stratum, static_cast<double>(p.samples))) - 1;
       continue;
     }
