@@ -316,19 +316,18 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   }
   if (stats) stats->candidates += cands.size();
   if (cands.empty() || !(b > a)) return;
-  // Sweep: candidates in order of entry (ties by level and id), an active list of those whose
-  // interval may hold the current sample, kept in that order; the march usually saturates long
-  // before the last candidate is reached.
-  std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
-    return x.t0 != y.t0 ? x.t0 < y.t0 : (x.level != y.level ? x.level < y.level : x.id < y.id);
-  });
-  // The active list holds the candidates whose [u0, u1] may hold the current sample, in the
-  // order above; they enter by u0.
+  // Sweep: an active list of the candidates whose [u0, u1] may hold the current sample, kept in
+  // order of entry t0 (ties by level and id); they enter by u0. Candidates no sample can reach
+  // only set the strata. The march usually saturates long before the last candidate is reached.
+  const auto before = [](const Candidate* x, const Candidate* y) {
+    return x->t0 != y->t0 ? x->t0 < y->t0 : (x->level != y->level ? x->level < y->level : x->id < y->id);
+  };
   std::vector<const Candidate*> entering;
   entering.reserve(cands.size());
   for (const Candidate& c : cands)
     if (c.u0 <= c.u1) entering.push_back(&c);
-  std::stable_sort(entering.begin(), entering.end(), [](const Candidate* x, const Candidate* y) { return x->u0 < y->u0; });
+  std::sort(entering.begin(), entering.end(),
+            [&before](const Candidate* x, const Candidate* y) { return x->u0 != y->u0 ? x->u0 < y->u0 : before(x, y); });
   std::vector<const Candidate*> active;
   std::size_t next = 0;
   const double delta = (b - a) / p.samples;
@@ -339,7 +338,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
     const double inv = 1.0 / (2 * sigma * sigma);
     const double reach = p.cutoff * sigma;
     for (; next < entering.size() && entering[next]->u0 <= t; ++next)
-      active.insert(std::upper_bound(active.begin(), active.end(), entering[next]), entering[next]);  // candidate order
+      active.insert(std::upper_bound(active.begin(), active.end(), entering[next], before), entering[next]);
     std::erase_if(active, [t](const Candidate* c) { return c->u1 < t; });
     if (active.empty()) {
       // No node reaches this sample: skip to the stratum of the next entry (exact: such samples
