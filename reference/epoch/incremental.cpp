@@ -396,8 +396,8 @@ Residuals residuals_of(const Sums& sums, std::size_t n, int shift) {
 // -(M_next_ij - M_prev_ij) x_j there (R1-INC-038), exact: no square root for the rest of the row,
 // which on a scale-free graph is a hub's thousands of entries. `touched_rows` holds the rows of N_h;
 // at h >= 1 every neighbour of a touched particle is in N_h and nothing moves here.
-Status move_by_changed_entries(const Graph& g, const Rows& pr, const EditBatch& batch, const RowOperatorQ32& touched_rows, const std::array<std::vector<Q32>, 5>& x, int shift,
-                               std::vector<i128>& image) {
+Status move_by_changed_entries(const Graph& g, const Rows& pr, const EditBatch& batch, const RowOperatorQ32& touched_rows,
+                               const std::array<std::vector<Q32>, 5>& x, int shift, std::vector<i128>& image) {
   const std::vector<std::uint32_t>& nh = touched_rows.rows;
   const std::int64_t scale = std::int64_t{1} << shift;
   for (std::size_t r = 0; r < nh.size(); ++r) {
@@ -604,8 +604,8 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
   carry_s += since(t_carry);
 
   // The rows (R1-INC-038): N_(h+1), the only rows of L~ u the batch and the update change; of them
-  // F = N_max(h,1), whose own rows changed or whose own entries move, are computed in full, and
-  // the rest only through their entries in N_h.
+  // F = N_h (every touched particle, whose own row changed, among them) are computed in full, and
+  // the rest only through their entries in touched columns (h = 0) and in N_h.
   const std::vector<std::uint32_t> rows = neighbourhood(g, batch.touched, info.hops + 1);
   info.rows = rows.size();
   // F = N_h: at h >= 1 it holds every particle whose own entries move; at h = 0 (N_h = the touched

@@ -100,6 +100,38 @@ TEST(Incremental, NeighbourhoodIsTheBallOfHHops) {
   EXPECT_EQ(r1::neighbourhood(g, {5}, 2), (std::vector<std::uint32_t>{3, 4, 5, 6, 7}));
   EXPECT_EQ(r1::neighbourhood(g, {0, 19}, 1), (std::vector<std::uint32_t>{0, 1, 18, 19}));
   EXPECT_EQ(r1::neighbourhood(g, {}, 3), std::vector<std::uint32_t>{});
+  // On a scale-free graph, against a plain breadth-first search with a mark per particle: small
+  // balls (sorted sets only) and balls that pass n / 16 (the marks take over), seeds repeated.
+  r1::GenParams ba;
+  ba.kind = r1::GenKind::kBa;
+  ba.n = 2000;
+  ba.seed = 3;
+  const r1::Graph b = graph(*r1::generate(ba));
+  for (const std::vector<std::uint32_t>& seeds : {std::vector<std::uint32_t>{1999}, std::vector<std::uint32_t>{1500, 1700, 1500},
+                                                  std::vector<std::uint32_t>{0, 5, 900, 1999}})
+    for (std::uint32_t h = 0; h <= 4; ++h) {
+      std::vector<char> in(b.n, 0);
+      std::vector<std::uint32_t> frontier;
+      for (const std::uint32_t x : seeds)
+        if (!in[x]) {
+          in[x] = 1;
+          frontier.push_back(x);
+        }
+      for (std::uint32_t k = 0; k < h; ++k) {
+        std::vector<std::uint32_t> next;
+        for (const std::uint32_t i : frontier)
+          for (std::uint64_t e = b.row_ptr[i]; e < b.row_ptr[i + 1]; ++e)
+            if (!in[b.col[e]]) {
+              in[b.col[e]] = 1;
+              next.push_back(b.col[e]);
+            }
+        frontier = next;
+      }
+      std::vector<std::uint32_t> want;
+      for (std::uint32_t i = 0; i < b.n; ++i)
+        if (in[i]) want.push_back(i);
+      EXPECT_EQ(r1::neighbourhood(b, seeds, h), want) << "h " << h << ", " << seeds.size() << " seeds";
+    }
 }
 
 // A link that only changes direction leaves A_sym and A2 alone but not the focus's A0: both

@@ -428,8 +428,9 @@ void summarise_for_focus(Graph& g) {
 }
 
 std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint32_t> seeds, std::uint32_t h) {
-  // Breadth first over sorted sets (no array of n, so the cost is the ball's rows): each hop's
-  // neighbours, less those already in, merged in.
+  // Breadth first over sorted sets while the ball is small (no array of n, so the cost is the
+  // ball's rows): each hop's neighbours, less those already in, merged in. Once a hop reaches
+  // n / 16 entries, a mark per particle for the rest (the cost of a pass over n is then no more).
   std::vector<std::uint32_t> all, frontier;
   for (const std::uint32_t s : seeds)
     if (s < g.n) frontier.push_back(s);
@@ -437,11 +438,15 @@ std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint
   frontier.erase(std::unique(frontier.begin(), frontier.end()), frontier.end());
   all = frontier;
   std::vector<std::uint32_t> reached, next, merged;
-  for (std::uint32_t hop = 0; hop < h && !frontier.empty(); ++hop) {
+  std::uint32_t hop = 0;
+  for (; hop < h && !frontier.empty(); ++hop) {
     reached.clear();
-    for (const std::uint32_t i : frontier)
+    for (const std::uint32_t i : frontier) {
       reached.insert(reached.end(), g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i]),
                      g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i + 1]));
+      if (reached.size() > g.n / 16) break;
+    }
+    if (reached.size() > g.n / 16) break;
     std::sort(reached.begin(), reached.end());
     reached.erase(std::unique(reached.begin(), reached.end()), reached.end());
     next.clear();
@@ -451,6 +456,23 @@ std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint
     all.swap(merged);
     frontier.swap(next);
   }
+  if (hop == h || frontier.empty()) return all;
+  // The rest of the hops, from `frontier` (hop `hop` not yet taken), with a mark per particle.
+  std::vector<char> in(g.n, 0);
+  for (const std::uint32_t i : all) in[i] = 1;
+  for (; hop < h && !frontier.empty(); ++hop) {
+    next.clear();
+    for (const std::uint32_t i : frontier)
+      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+        if (!in[g.col[k]]) {
+          in[g.col[k]] = 1;
+          next.push_back(g.col[k]);
+        }
+    frontier.swap(next);
+  }
+  all.clear();
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    if (in[i]) all.push_back(i);
   return all;
 }
 

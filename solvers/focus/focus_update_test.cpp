@@ -131,7 +131,8 @@ TEST(FocusUpdate, TheGraphsSummaryIsItsArraysAndChangesNoBit) {
       given += num / total;
       rem[i] = {num % total, i};
     }
-    std::sort(rem.begin(), rem.end(), [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
+    std::sort(rem.begin(), rem.end(),
+              [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
     for (u128 k = 0; k < (u128{1} << 32) - given; ++k) ++share[rem[static_cast<std::size_t>(k)].second];
     EXPECT_EQ(g.prior, share);
     std::vector<std::uint32_t> dangling;
@@ -151,7 +152,8 @@ TEST(FocusUpdate, TheGraphsSummaryIsItsArraysAndChangesNoBit) {
     EXPECT_EQ(full->phi, full_bare->phi);
     EXPECT_EQ(full->steps, full_bare->steps);
     const std::vector<std::uint32_t> region = r1::neighbourhood(g, {dangling.empty() ? 7u : dangling[0], 40u}, 1);
-    const auto local = r1::update_focus_q32(g, p, 0.2, *full, region), local_bare = r1::update_focus_q32(bare, p, 0.2, *full, region);
+    const auto local = r1::update_focus_q32(g, p, 0.2, *full, region);
+    const auto local_bare = r1::update_focus_q32(bare, p, 0.2, *full, region);
     ASSERT_TRUE(local.is_ok() && local_bare.is_ok());
     EXPECT_EQ(local->phi, local_bare->phi);
     EXPECT_EQ(local->heat, local_bare->heat);
@@ -165,7 +167,8 @@ TEST(FocusUpdate, TheGraphsSummaryIsItsArraysAndChangesNoBit) {
     r1::Focus<Q32> unknown = *full;
     unknown.on_simplex = false;
     unknown.cyberank.clear();
-    const std::uint32_t low = full->cyberank.size() < g.n ? static_cast<std::uint32_t>(std::min_element(full->phi.begin(), full->phi.end()) - full->phi.begin()) : 0;
+    // The particle of least phi: far from the places.
+    const auto low = static_cast<std::uint32_t>(std::min_element(full->phi.begin(), full->phi.end()) - full->phi.begin());
     for (const std::vector<std::uint32_t>& r : {std::vector<std::uint32_t>{low}, r1::neighbourhood(g, {full->cyberank[0]}, 1)}) {
       const auto known = r1::update_focus_q32(g, p, 0.2, *full, r), plain = r1::update_focus_q32(g, p, 0.2, unknown, r);
       ASSERT_TRUE(known.is_ok() && plain.is_ok());

@@ -127,7 +127,8 @@ void apportion_into(std::uint64_t total, std::span<const std::uint64_t> w, std::
   // Equal weights (a row of unit links): every quotient is floor(T / n) and every remainder the
   // same, so the ties go to the first T mod n items (R1-FOC-010 in closed form; all zero counts
   // every weight as 1, the same shares).
-  if (!w.empty() && out.size() == w.size() && total < (std::uint64_t{1} << 63) && std::all_of(w.begin(), w.end(), [&w](std::uint64_t x) { return x == w[0]; })) {
+  const auto equal = [&w](std::uint64_t x) { return x == w[0]; };
+  if (!w.empty() && out.size() == w.size() && total < (std::uint64_t{1} << 63) && std::all_of(w.begin(), w.end(), equal)) {
     const std::uint64_t q = total / w.size(), extra = total % w.size();
     for (std::size_t i = 0; i < w.size(); ++i) out[i] = static_cast<std::int64_t>(q + (i < extra ? 1 : 0));
     return;
