@@ -88,11 +88,17 @@ void apportion_rows(const std::vector<std::uint64_t>& ptr, const std::vector<std
 
 // The prior u = apportion(2^32, d) (R1-FOC-011), raws.
 std::vector<std::int64_t> prior_raws(const Graph& g) {
-  if (g.summarised()) return g.prior;
   std::vector<std::int64_t> share(g.n);
   ApportionScratch scratch;
   apportion_into(kOne, g.degree, share, scratch);
   return share;
+}
+
+// The prior's raws: the graph's own (R1-IN-059), else computed into `own`.
+const std::vector<std::int64_t>& prior_of(const Graph& g, std::vector<std::int64_t>& own) {
+  if (g.summarised()) return g.prior;
+  own = prior_raws(g);
+  return own;
 }
 
 std::uint64_t row_sum(const std::vector<std::uint64_t>& ptr, const std::vector<std::int64_t>& w, std::uint32_t i) {
@@ -148,7 +154,8 @@ Result<OperatorsQ32> OperatorsQ32::build(const Graph& g, const TriKernelParams& 
     ops.walk_.resize(g.col.size());
     apportion_rows(g.row_ptr, g.w, mirror, ops.walk_);
   }
-  const std::vector<std::int64_t> prior = prior_raws(g);
+  std::vector<std::int64_t> own;
+  const std::vector<std::int64_t>& prior = prior_of(g, own);
   ops.prior_.resize(g.n);
   for (std::uint32_t i = 0; i < g.n; ++i) ops.prior_[i] = Q32::from_raw(prior[i]);
   ops.set_constants(params, g.n);
@@ -270,12 +277,9 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   for (const std::uint32_t p : region)
     if (g.out_ptr[p] == g.out_ptr[p + 1]) ops.frozen_dangling_ -= phi[p].raw;
   ops.prior_.assign(count, Q32{});
-  if (g.summarised()) {
-    for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(g.prior[region[a]]);
-  } else {
-    const std::vector<std::int64_t> prior = prior_raws(g);
-    for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);
-  }
+  std::vector<std::int64_t> own;
+  const std::vector<std::int64_t>& prior = prior_of(g, own);
+  for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);
   ops.set_constants(params, g.n);
   ops.row_ptr_ = rows->row_ptr.data();
   ops.col_ = rows->col.data();
@@ -424,7 +428,7 @@ void summarise_for_focus(Graph& g) {
     g.max_degree = std::max(g.max_degree, g.degree[p]);
     if (g.out_ptr[p] == g.out_ptr[p + 1]) g.dangling.push_back(p);
   }
-  g.prior = focus::prior_raws(g);  // computed: `prior` is still empty here
+  g.prior = focus::prior_raws(g);
 }
 
 std::vector<std::uint32_t> within_hops(const Graph& g, std::span<const std::uint32_t> seeds, std::uint32_t h) {
