@@ -198,11 +198,12 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
   const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
   const bool offset = !heat_offset.empty();
   std::vector<Q32> d, s, h, v(active);
+  focus::HeatScratch scratch;
   for (std::uint32_t step = 0; step < steps; ++step) {
     // A zero-weight operator contributes exactly 0 and is skipped (R1-FOC-050).
     if (use_d) ops.diffusion(phi, d);
     if (use_s) ops.springs(phi, s);
-    if (use_h) focus::heat_q32(ops, heat, phi, h);
+    if (use_h) focus::heat_q32(ops, heat, phi, h, &scratch);
     focus::for_rows(parallel, active, [&](std::uint32_t b, std::uint32_t e) {
       for (std::uint32_t i = b; i < e; ++i) {
         i128 acc = 0;  // three products below 2^96: exact

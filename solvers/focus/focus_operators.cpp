@@ -298,8 +298,10 @@ void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) co
   for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t q = b; q < e; ++q) {
       i128 acc = 0;
-      for (std::uint64_t s = pattern_.in_ptr[q]; s < pattern_.in_ptr[q + 1]; ++s)
+      for (std::uint64_t s = pattern_.in_ptr[q]; s < pattern_.in_ptr[q + 1]; ++s) {
+        gather_ahead(phi.data(), pattern_.in_src.data(), s, in_p_.size());
         acc += static_cast<i128>(in_p_[s]) * phi[pattern_.in_src[s]].raw;
+      }
       const std::int64_t y = round_q32(acc);
       out[q] = Q32::from_raw(round_q32(static_cast<i128>(one_minus_t_) * y + static_cast<i128>(c) * prior_[q].raw));
     }
@@ -311,7 +313,10 @@ void OperatorsQ32::springs(std::span<const Q32> phi, std::vector<Q32>& out) cons
   for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t i = b; i < e; ++i) {
       i128 num = static_cast<i128>(springs_a_) << 32;
-      for (std::uint64_t k = row_ptr_[i]; k < row_ptr_[i + 1]; ++k) num += static_cast<i128>(w_[k]) * phi[col_[k]].raw;
+      for (std::uint64_t k = row_ptr_[i]; k < row_ptr_[i + 1]; ++k) {
+        gather_ahead(phi.data(), col_, k, walk_.size());
+        num += static_cast<i128>(w_[k]) * phi[col_[k]].raw;
+      }
       // num is on the 2^-64 scale and mu + d_i on 2^-32, so num / (mu + d_i) is the raw itself.
       const i128 r = fx::detail::rne_div(num, static_cast<i128>(mu_) + degree_[i]);
       if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("focus: springs");

@@ -91,7 +91,8 @@ HeatCoefficients heat_coefficients(Q32 tau, std::uint32_t degree) {
 
 namespace focus {
 
-void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<const Q32> x, std::vector<Q32>& out) {
+void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<const Q32> x, std::vector<Q32>& out,
+              HeatScratch* scratch) {
   const std::uint32_t n = ops.n();
   // Rows from m on are empty (build_local's ring): N x = x there, so within a sub-step every t_k
   // equals t_0 on them, and their sum is (sum_k c_k) t_0, exactly as the recurrence computes it
@@ -99,27 +100,37 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
   // the rows before m only: the work is the region's, the bits those of the full recurrence.
   const std::uint32_t m = ops.fixed_from();
   const std::size_t terms = coeff.q32.size();
+  const bool parallel = ops.parallel();
   i128 c_sum = 0;  // at most 33 coefficients below 2^33 each
   for (const Q32 c : coeff.q32) c_sum += c.raw;
-  std::vector<Q32> t0(x.begin(), x.end()), t1(n), t2(n);
-  std::vector<i128> acc(m);  // sum_k c_k t_k exactly: K + 1 <= 33 terms below 2^96 each
+  HeatScratch own;
+  HeatScratch& w = scratch != nullptr ? *scratch : own;
+  std::vector<Q32>&t0 = w.t0, &t1 = w.t1, &t2 = w.t2;
+  t0.assign(x.begin(), x.end());
+  t1.resize(n);
+  t2.resize(n);
+  std::vector<i128>& acc = w.acc;  // sum_k c_k t_k exactly: K + 1 <= 33 terms below 2^96 each
+  acc.resize(m);
+  const std::int64_t c0 = coeff.q32[0].raw;
   for (std::uint32_t sub = 0; sub < coeff.substeps; ++sub) {
     std::copy(t0.begin() + m, t0.end(), t1.begin() + m);
     std::copy(t0.begin() + m, t0.end(), t2.begin() + m);
-    const std::int64_t c0 = coeff.q32[0].raw;
-    for (std::uint32_t i = 0; i < m; ++i) acc[i] = static_cast<i128>(c0) * t0[i].raw;
     if (terms > 1) {
       const std::int64_t c1 = coeff.q32[1].raw;
-      for_rows(ops.parallel(), m, [&](std::uint32_t b, std::uint32_t e) {
+      for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
         for (std::uint32_t i = b; i < e; ++i) {
           t1[i] = Q32::from_raw(round_q32(ops.walk_row(i, t0.data())));  // t_1 = N t_0
-          acc[i] += static_cast<i128>(c1) * t1[i].raw;
+          acc[i] = static_cast<i128>(c0) * t0[i].raw + static_cast<i128>(c1) * t1[i].raw;
         }
+      });
+    } else {
+      for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t i = b; i < e; ++i) acc[i] = static_cast<i128>(c0) * t0[i].raw;
       });
     }
     for (std::size_t k = 2; k < terms; ++k) {
       const std::int64_t ck = coeff.q32[k].raw;
-      for_rows(ops.parallel(), m, [&](std::uint32_t b, std::uint32_t e) {
+      for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
         for (std::uint32_t i = b; i < e; ++i) {
           // t_(k+1),i = RNE(2 sum_j N(i, j) t_k,j - t_(k-1),i), one rounding.
           const i128 exact = 2 * ops.walk_row(i, t1.data()) - (static_cast<i128>(t0[i].raw) << 32);
@@ -131,10 +142,13 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
       std::swap(t1, t2);
     }
     // The sub-step result, rounded once; it is the next sub-step's t_0.
-    for (std::uint32_t i = 0; i < m; ++i) t0[i] = Q32::from_raw(round_q32(acc[i]));
+    for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) t0[i] = Q32::from_raw(round_q32(acc[i]));
+    });
     for (std::uint32_t i = m; i < n; ++i) t0[i] = Q32::from_raw(round_q32(c_sum * t0[i].raw));
   }
-  out = std::move(t0);
+  // The result leaves through a swap: `out`'s old buffer is the next call's t_0.
+  out.swap(t0);
 }
 
 void heat_f64(const OperatorsF64& ops, const HeatCoefficients& coeff, std::span<const double> x, std::vector<double>& out) {
