@@ -296,6 +296,9 @@ Result<std::vector<std::uint32_t>> Context::State::spirv(std::string_view glsl, 
 }
 
 Result<std::uint32_t> Context::compute_compile(std::string_view glsl, std::string_view name) {
+  // The same source is the same pipeline: kernels made once per stage call (the focus products,
+  // R1-BKD-064) compile once per context.
+  if (const auto hit = s_->compute_by_source.find(glsl); hit != s_->compute_by_source.end()) return hit->second;
   R1_ASSIGN(const std::vector<std::uint32_t> words, s_->spirv(glsl, shaderc_compute_shader, name));
   const std::string label(name);
   auto mi = make<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
@@ -315,7 +318,9 @@ Result<std::uint32_t> Context::compute_compile(std::string_view glsl, std::strin
   if (r != VK_SUCCESS) return fail("vkCreateComputePipelines for " + label, r);
   s_->pipelines.push_back(pipeline);
   s_->graphics_pipeline.push_back(false);
-  return static_cast<std::uint32_t>(s_->pipelines.size() - 1);
+  const auto id = static_cast<std::uint32_t>(s_->pipelines.size() - 1);
+  s_->compute_by_source.emplace(std::string(glsl), id);
+  return id;
 }
 
 Status Context::dispatch(std::uint32_t pipeline, std::span<const Slot> slots, std::array<std::uint32_t, 3> groups,

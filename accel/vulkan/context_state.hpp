@@ -11,6 +11,7 @@
 #include <string_view>
 #include <array>
 #include <string>
+#include <map>
 #include <vector>
 
 #include "r1/accel/vulkan.hpp"
@@ -53,6 +54,7 @@ struct Context::State {
   std::vector<Buffer> buffers;  // buffers[0]: the 16-byte placeholder every unused slot binds
   std::vector<VkPipeline> pipelines;  // compute and graphics
   std::vector<bool> graphics_pipeline;  // per pipeline: made by graphics_compile
+  std::map<std::string, std::uint32_t, std::less<>> compute_by_source;  // compute_compile's pipelines by GLSL
   // An offscreen render target: kTargetColors colour images (RGBA32_UINT) and a depth image
   // (D32_SFLOAT), device memory, with a host-visible buffer each colour image is copied to.
   struct Target {

@@ -2,6 +2,7 @@
 // limbs, rounded once, ties to even, the bits of the host's i128 arithmetic.
 #include <cstring>
 #include <string>
+#include <utility>
 
 #include "r1/accel/vulkan.hpp"
 #include "shader_common.hpp"
@@ -57,6 +58,29 @@ void main() {
 )";
 
 }  // namespace
+
+ExactSpmv& ExactSpmv::operator=(ExactSpmv&& o) noexcept {
+  if (this == &o) return *this;
+  this->~ExactSpmv();
+  ctx_ = std::exchange(o.ctx_, nullptr);
+  rows_ = o.rows_;
+  columns_ = o.columns_;
+  identity_ = o.identity_;
+  pipeline_ = o.pipeline_;
+  row_ptr_ = o.row_ptr_;
+  col_ = o.col_;
+  val_ = o.val_;
+  x_ = o.x_;
+  y_ = o.y_;
+  flag_ = o.flag_;
+  return *this;
+}
+
+ExactSpmv::~ExactSpmv() {
+  if (ctx_ == nullptr) return;
+  for (const std::uint32_t id : {row_ptr_, col_, val_, x_, y_, flag_}) ctx_->buffer_release(id);  // 0 (never made): a no-op
+  ctx_ = nullptr;
+}
 
 Result<ExactSpmv> ExactSpmv::build(Context& ctx, std::span<const std::uint64_t> row_ptr, std::span<const std::uint32_t> col,
                                    std::span<const std::int64_t> val, bool empty_rows_identity) {

@@ -20,6 +20,38 @@ namespace r1::backends {
 
 namespace {
 
+// The focus's exact products on the device (R1-FOC-092): vk::ExactSpmv, which keeps the context
+// alive while it holds its buffers. Columns past the matrix's last (a vector's tail that no entry
+// reads) are not uploaded.
+class DeviceProduct final : public ExactProduct {
+ public:
+  DeviceProduct(std::shared_ptr<vk::Context> ctx, vk::ExactSpmv spmv) : ctx_(std::move(ctx)), spmv_(std::move(spmv)) {}
+  Result<std::vector<std::int64_t>> apply(std::span<const std::int64_t> x) override {
+    return spmv_.apply(x.size() > spmv_.columns() ? x.first(spmv_.columns()) : x);
+  }
+
+ private:
+  std::shared_ptr<vk::Context> ctx_;
+  vk::ExactSpmv spmv_;
+};
+
+// Whether $var (device or host) leaves a stage's kernels on the device: unset or empty, yes.
+bool on_device_unless(const char* var) {
+  const char* env = std::getenv(var);
+  if (env == nullptr || *env == '\0') return true;
+  const std::string m = env;
+  if (m != "host" && m != "device") throw std::invalid_argument(std::string(var) + "=" + m + ": device or host");
+  return m == "device";
+}
+
+ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
+  return [ctx](std::span<const std::uint64_t> ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
+               bool identity) -> Result<std::unique_ptr<ExactProduct>> {
+    R1_ASSIGN(vk::ExactSpmv spmv, vk::ExactSpmv::build(*ctx, ptr, col, val, identity));
+    return std::unique_ptr<ExactProduct>(std::make_unique<DeviceProduct>(ctx, std::move(spmv)));
+  };
+}
+
 struct PassState {
   std::shared_ptr<vk::Context> ctx;
   vk::ImpostorPass impostors;
@@ -201,34 +233,39 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   passes.composite = [state](const render::CompositeInput& in, render::Image& image, render::FrameStats& st) {
     return composite_on_device(*state, in, image, st);
   };
-  // The spectral solver's inner products and combinations on the device (R1-BKD-069), unless
-  // $R1_VULKAN_SPECTRAL=host keeps them on the host's kernels.
-  bool spectral_on_device = true;
-  if (const char* env = std::getenv("R1_VULKAN_SPECTRAL"); env != nullptr && *env != '\0') {
-    const std::string m = env;
-    if (m == "host") spectral_on_device = false;
-    else if (m != "device") throw std::invalid_argument("R1_VULKAN_SPECTRAL=" + m + ": device or host");
-  }
+  // The spectral solver's inner products and combinations on the device (R1-BKD-069) and the full
+  // focus's sparse products (R1-FOC-092, R1-BKD-064), unless $R1_VULKAN_SPECTRAL=host or
+  // $R1_VULKAN_FOCUS=host keeps them on the host.
+  const bool spectral_on_device = on_device_unless("R1_VULKAN_SPECTRAL");
+  const bool focus_on_device = on_device_unless("R1_VULKAN_FOCUS");
   Q32KernelFactory kernels;
   std::string epoch;
   if (spectral_on_device) {
     auto factory = vk::panel_kernel_factory(state->ctx);
     if (!factory.is_ok()) throw std::invalid_argument(factory.status().message());
     kernels = std::move(factory).value();
-    epoch = "the spectral solver's exact inner products and combinations on the device, its operator, focus, encoding and "
-            "hierarchy the cpu backend's on the host";
+    epoch = "the spectral solver's exact inner products and combinations on the device, its operator on the host";
   } else {
 #if R1_BACKEND_CPU
     std::string error;
     const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
     if (!error.empty()) throw std::invalid_argument(error);
     kernels = accel::cpu::kernel_factory(level);
-    epoch = "epoch stages the cpu backend's on the host";
+    epoch = "the spectral stage the cpu backend's on the host";
 #else
-    epoch = "epoch stages the reference's with their TBB switches, on the host";
+    epoch = "the spectral stage the reference's with its TBB switch, on the host";
 #endif
   }
-  ReferenceStages stages(true, false, std::move(kernels));
+  ExactProductFactory products;
+  if (focus_on_device) {
+    products = device_products(state->ctx);
+    epoch += "; the full focus's sparse products (the heat kernel's walks, the diffusion's in-link sums) exact on the device, "
+             "its springs, combinations and local updates on the host";
+  } else {
+    epoch += "; the focus on the host";
+  }
+  epoch += "; encoding and hierarchy with their TBB switches on the host";
+  ReferenceStages stages(true, false, std::move(kernels), std::move(products));
   return std::make_unique<StageBackend>(
       "vulkan",
       "on " + name + ": the T1/T2 impostor pass " +

@@ -63,9 +63,11 @@ Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOp
   return to_q32(s);
 }
 
-Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& o, double lambda2, const ProgressFn& progress) {
+Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& o, double lambda2, const ProgressFn& progress,
+                                         const ExactProductFactory& products) {
   FocusOptions fo;
   fo.parallel = o.parallel;
+  fo.products = products;
   if (o.domain == NumericDomain::kQ32) return compute_focus_q32(graph, o.trikernel, lambda2, progress, fo);
   R1_ASSIGN(const Focus<double> f, compute_focus_f64(graph, o.trikernel, lambda2, progress, fo));
   Focus<Q32> q;
@@ -91,8 +93,8 @@ Result<Spectrum<Q32>> ReferenceStages::spectral(const Graph& g, const EpochOptio
 }
 
 Result<Focus<Q32>> ReferenceStages::focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) {
-  if (!parallel_ && !fp64_) return reference_focus_stage(g, o, lambda2, p);
-  return reference_focus_stage(g, adjusted(o), lambda2, p);
+  if (!parallel_ && !fp64_) return reference_focus_stage(g, o, lambda2, p, products_);
+  return reference_focus_stage(g, adjusted(o), lambda2, p, products_);
 }
 
 Result<Focus<Q32>> ReferenceStages::focus_update(const Graph& g, const EpochOptions& o, double lambda2,

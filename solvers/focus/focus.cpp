@@ -115,6 +115,8 @@ auto guarded(const F& body) -> decltype(body()) {
     return Status::internal(std::string("focus: ") + e.what());
   } catch (const std::bad_alloc&) {
     return Status::internal("focus: out of memory");
+  } catch (const focus::ProductError& e) {
+    return Status::internal(std::string("focus: ") + e.what());
   }
 }
 
@@ -259,7 +261,8 @@ Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& p, d
                                      const ProgressFn& progress, const FocusOptions& options) {
   return guarded([&]() -> Result<Focus<Q32>> {
     R1_ASSIGN(const FocusPlan plan, plan_focus_steps(g, p, lambda2));
-    R1_ASSIGN(const auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
+    R1_ASSIGN(auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
+    if (options.products) R1_TRY(ops.use_products(options.products));
     std::vector<Q32> phi = project_to_simplex_q32(ops.prior());  // R1-FOC-012
     run_steps_q32(ops, p, plan.steps, g.n, std::uint64_t{1} << 32, options.parallel, phi, progress);
     // The heat term of the result, which the next incremental epoch starts from (R1-INC-052).
@@ -274,7 +277,8 @@ Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& p, d
 Result<std::vector<Q32>> heat_term_q32(const Graph& g, const TriKernelParams& p, std::span<const Q32> x, const FocusOptions& options) {
   return guarded([&]() -> Result<std::vector<Q32>> {
     if (x.size() != g.n) return Status::input("heat term: " + std::to_string(x.size()) + " values for " + std::to_string(g.n) + " particles");
-    R1_ASSIGN(const auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
+    R1_ASSIGN(auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
+    if (options.products) R1_TRY(ops.use_products(options.products));
     std::vector<Q32> heat;
     focus::heat_q32(ops, heat_coefficients(p.tau, p.chebyshev_degree), x, heat);
     return heat;

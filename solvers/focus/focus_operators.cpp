@@ -289,12 +289,84 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   return ops;
 }
 
+namespace {
+
+// The raws of Q32 vectors, one after the other, as the products take them.
+std::vector<std::int64_t> raws(std::span<const Q32> x, std::span<const Q32> then = {}) {
+  std::vector<std::int64_t> r;
+  r.reserve(x.size() + then.size());
+  for (const Q32 v : x) r.push_back(v.raw);
+  for (const Q32 v : then) r.push_back(v.raw);
+  return r;
+}
+
+std::vector<std::int64_t> applied(ExactProduct& product, std::span<const std::int64_t> x) {
+  auto y = product.apply(x);
+  if (!y.is_ok()) throw ProductError(y.status().message());
+  return std::move(y).value();
+}
+
+void to_q32(const std::vector<std::int64_t>& y, std::vector<Q32>& out) {
+  out.resize(y.size());
+  for (std::size_t i = 0; i < y.size(); ++i) out[i] = Q32::from_raw(y[i]);
+}
+
+}  // namespace
+
+Status OperatorsQ32::use_products(const ExactProductFactory& factory) {
+  if (local_ != nullptr) return Status::internal("focus: the products serve whole-graph operators only");
+  const std::uint32_t count = n();
+  const std::span<const std::uint64_t> ptr(row_ptr_, std::size_t{count} + 1);
+  const std::span<const std::uint32_t> col(col_, walk_.size());
+  R1_ASSIGN(std::unique_ptr<ExactProduct> w, factory(ptr, col, walk_, true));
+  // The Chebyshev step over (t, prev), 2n columns: row i is 2 N(i, .) on t and -2^32 on prev_i,
+  // so its exact sum is 2 sum_j N(i, j) t_j - prev_i 2^32; an isolated i takes 2 t_i 2^32, its
+  // walk's identity row (R1-FOC-041, R1-FOC-043).
+  std::vector<std::uint64_t> cptr(std::size_t{count} + 1, 0);
+  std::vector<std::uint32_t> ccol;
+  std::vector<std::int64_t> cval;
+  ccol.reserve(walk_.size() + count);
+  cval.reserve(walk_.size() + count);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (ptr[i] == ptr[i + 1]) {
+      ccol.push_back(i);
+      cval.push_back(static_cast<std::int64_t>(2 * kOne));
+    }
+    for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) {
+      ccol.push_back(col_[k]);
+      cval.push_back(2 * walk_[k]);
+    }
+    ccol.push_back(count + i);
+    cval.push_back(-static_cast<std::int64_t>(kOne));
+    cptr[i + 1] = ccol.size();
+  }
+  R1_ASSIGN(std::unique_ptr<ExactProduct> c, factory(cptr, ccol, cval, false));
+  R1_ASSIGN(std::unique_ptr<ExactProduct> in, factory(pattern_.in_ptr, pattern_.in_src, in_p_, false));
+  dev_walk_ = std::move(w);
+  dev_chebyshev_ = std::move(c);
+  dev_in_ = std::move(in);
+  return Status::ok();
+}
+
+void OperatorsQ32::chebyshev_step(std::span<const Q32> t, std::span<const Q32> prev, std::vector<Q32>& out) const {
+  to_q32(applied(*dev_chebyshev_, raws(t, prev)), out);
+}
+
 void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) const {
   out.resize(n());
   i128 dangling_mass = frozen_dangling_;  // exact: at most n raws below 2^63
   for (const std::uint32_t p : pattern_.dangling) dangling_mass += phi[p].raw;
   // c = RNE((1 - t) m + t): the dangling mass and the teleport both go to the prior.
   const std::int64_t c = round_q32(static_cast<i128>(one_minus_t_) * dangling_mass + (static_cast<i128>(teleport_) << 32));
+  if (dev_in_ != nullptr) {
+    // y_q on the products, the rest of the row as below.
+    const std::vector<std::int64_t> y = applied(*dev_in_, raws(phi));
+    for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t q = b; q < e; ++q)
+        out[q] = Q32::from_raw(round_q32(static_cast<i128>(one_minus_t_) * y[q] + static_cast<i128>(c) * prior_[q].raw));
+    });
+    return;
+  }
   for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t q = b; q < e; ++q) {
       i128 acc = 0;
@@ -326,6 +398,7 @@ void OperatorsQ32::springs(std::span<const Q32> phi, std::vector<Q32>& out) cons
 }
 
 void OperatorsQ32::walk(std::span<const Q32> x, std::vector<Q32>& out) const {
+  if (dev_walk_ != nullptr) return to_q32(applied(*dev_walk_, raws(x)), out);
   out.resize(n());
   for_rows(parallel_, n(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t i = b; i < e; ++i) out[i] = Q32::from_raw(round_q32(walk_row(i, x.data())));

@@ -8,12 +8,14 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 #include "r1/fixedpoint/int128.hpp"
 #include "r1/fixedpoint/q32.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/graph.hpp"
+#include "r1/solvers/focus.hpp"
 #include "r1/spec/status.hpp"
 
 namespace r1::focus {
@@ -44,6 +46,11 @@ template <class T>
 inline void gather_ahead(const T* x, const std::uint32_t* col, std::uint64_t k, std::uint64_t end) {
   if (k + kGatherAhead < end) __builtin_prefetch(x + col[k + kGatherAhead]);
 }
+
+// A backend's product failed (R1-FOC-092): the stage reports it as an internal error.
+struct ProductError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 // Round-to-nearest-even of v / 2^32 to a Q32 raw; OverflowError when it does not fit.
 inline std::int64_t round_q32(i128 v) {
@@ -93,10 +100,18 @@ class OperatorsQ32 {
   std::uint32_t fixed_from() const { return std::min(fixed_from_, n()); }
   const std::vector<Q32>& prior() const { return prior_; }
 
+  // Makes the whole-graph products on `factory`'s (R1-FOC-092): N, the heat kernel's Chebyshev
+  // step and the diffusion's in-link sums. Only for build()'s operators.
+  Status use_products(const ExactProductFactory& factory);
+  bool on_products() const { return dev_walk_ != nullptr; }
+
   // D(phi) (R1-FOC-021), S(phi) (R1-FOC-030), N x (R1-FOC-041); `out` is resized to n.
   void diffusion(std::span<const Q32> phi, std::vector<Q32>& out) const;
   void springs(std::span<const Q32> phi, std::vector<Q32>& out) const;
   void walk(std::span<const Q32> x, std::vector<Q32>& out) const;
+  // The heat kernel's step on the products (on_products()): out_i = RNE(2 (N t)_i - prev_i), as
+  // heat_q32's row loop computes it (R1-FOC-043).
+  void chebyshev_step(std::span<const Q32> t, std::span<const Q32> prev, std::vector<Q32>& out) const;
 
   // sum_j N(i, j) x_j exactly, on the 2^-64 scale (x_i * 2^32 for an isolated particle).
   i128 walk_row(std::uint32_t i, const Q32* x) const {
@@ -133,6 +148,8 @@ class OperatorsQ32 {
     std::vector<std::int64_t> w;
   };
   std::shared_ptr<const LocalRows> local_;
+  // use_products(): N with identity rows, [2N | -2^32 I] over (t, prev), the in-link sums.
+  std::shared_ptr<ExactProduct> dev_walk_, dev_chebyshev_, dev_in_;
 };
 
 // ---- fp64 -----------------------------------------------------------------------------------------

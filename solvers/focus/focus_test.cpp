@@ -742,6 +742,91 @@ RC_GTEST_PROP(FocusIteration, PageRankOnRandomGraphs, ()) {
   RC_ASSERT(e.l1 <= e.bound);
 }
 
+// An exact product written from R1-FOC-092's definition alone (an exact i128 row sum, rounded
+// once half to even), counting its applications; `fail_after` makes the n-th application fail.
+class PlainProduct final : public r1::ExactProduct {
+ public:
+  PlainProduct(std::span<const std::uint64_t> ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
+               bool identity, int* applications, int fail_after)
+      : ptr_(ptr.begin(), ptr.end()), col_(col.begin(), col.end()), val_(val.begin(), val.end()), identity_(identity),
+        applications_(applications), fail_after_(fail_after) {}
+  r1::Result<std::vector<std::int64_t>> apply(std::span<const std::int64_t> x) override {
+    if (++*applications_ == fail_after_) return r1::Status::internal("plain product: failed as asked");
+    std::vector<std::int64_t> y(ptr_.size() - 1);
+    for (std::size_t i = 0; i + 1 < ptr_.size(); ++i) {
+      if (ptr_[i] == ptr_[i + 1]) {
+        y[i] = identity_ ? x[i] : 0;
+        continue;
+      }
+      r1::i128 sum = 0;
+      for (std::uint64_t k = ptr_[i]; k < ptr_[i + 1]; ++k) sum += static_cast<r1::i128>(val_[k]) * x[col_[k]];
+      r1::i128 q = sum >> 32;  // floor
+      const r1::i128 rem = sum - q * (r1::i128{1} << 32);
+      if (rem > (r1::i128{1} << 31) || (rem == (r1::i128{1} << 31) && (q & 1) != 0)) ++q;
+      y[i] = static_cast<std::int64_t>(q);
+    }
+    return y;
+  }
+
+ private:
+  std::vector<std::uint64_t> ptr_;
+  std::vector<std::uint32_t> col_;
+  std::vector<std::int64_t> val_;
+  bool identity_;
+  int* applications_;
+  int fail_after_;
+};
+
+r1::ExactProductFactory plain_products(int* applications, int fail_after = 0) {
+  return [=](std::span<const std::uint64_t> ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
+             bool identity) -> r1::Result<std::unique_ptr<r1::ExactProduct>> {
+    return std::unique_ptr<r1::ExactProduct>(std::make_unique<PlainProduct>(ptr, col, val, identity, applications, fail_after));
+  };
+}
+
+// R1-FOC-092: the whole-graph products on a backend's exact product (here the plain one above)
+// give the row loops' bits: phi, the heat term, cyberank, on graphs with isolated particles,
+// dangling sources and several components, and on every parameter set (Chebyshev degree 1..11,
+// several sub-steps).
+RC_GTEST_PROP(FocusProducts, ABackendsExactProductGivesTheRowLoopsBits, ()) {
+  const Graph g = random_graph();
+  const TriKernelParams p = random_params();
+  const double lambda2 = *rc::gen::inRange(0, 1000) / 1000.0;
+  int applications = 0;
+  r1::FocusOptions on;
+  on.products = plain_products(&applications);
+  on.parallel = *rc::gen::arbitrary<bool>();
+  const auto a = r1::compute_focus_q32(g, p, lambda2);
+  const auto b = r1::compute_focus_q32(g, p, lambda2, {}, on);
+  RC_ASSERT(a.is_ok());
+  RC_ASSERT(b.is_ok());
+  RC_ASSERT(a->phi == b->phi);
+  RC_ASSERT(a->heat == b->heat);
+  RC_ASSERT(a->cyberank == b->cyberank);
+  RC_ASSERT(a->syntropy == b->syntropy);
+  // Every step ran on the products: a diffusion, and K walks per heat sub-step (and the result's
+  // heat term once more), when their weights are not 0.
+  const std::uint32_t substeps = r1::heat_coefficients(p.tau, p.chebyshev_degree).substeps;
+  const int per_heat = p.lambda_h.raw != 0 ? static_cast<int>(substeps * p.chebyshev_degree) : 0;
+  RC_ASSERT(applications == static_cast<int>(a->steps) * ((p.lambda_d.raw != 0 ? 1 : 0) + per_heat) + per_heat);
+  const auto ha = r1::heat_term_q32(g, p, a->phi);
+  const auto hb = r1::heat_term_q32(g, p, a->phi, on);
+  RC_ASSERT(ha.is_ok() && hb.is_ok());
+  RC_ASSERT(*ha == *hb);
+}
+
+TEST(FocusProducts, AFailingProductIsTheStagesInternalError) {
+  const Graph g = generated(r1::GenKind::kBa, 300, 3);
+  int applications = 0;
+  r1::FocusOptions on;
+  on.products = plain_products(&applications, 5);
+  const auto f = r1::compute_focus_q32(g, TriKernelParams{}, 0.3, {}, on);
+  ASSERT_FALSE(f.is_ok());
+  EXPECT_EQ(f.status().kind(), r1::ErrorKind::kInternal);
+  EXPECT_EQ(f.status().message(), "focus: plain product: failed as asked");
+  EXPECT_EQ(applications, 5);
+}
+
 TEST(FocusIteration, BitIdenticalRerunsAndParallel) {
   const Graph g = generated(r1::GenKind::kBa, 6000, 4);
   TriKernelParams p;

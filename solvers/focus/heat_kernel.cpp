@@ -115,31 +115,46 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
   for (std::uint32_t sub = 0; sub < coeff.substeps; ++sub) {
     std::copy(t0.begin() + m, t0.end(), t1.begin() + m);
     std::copy(t0.begin() + m, t0.end(), t2.begin() + m);
-    if (terms > 1) {
-      const std::int64_t c1 = coeff.q32[1].raw;
+    if (ops.on_products()) {
+      // The same recurrence with each product on the backend's (R1-FOC-092): a whole-graph
+      // operator, so m = n.
+      if (terms > 1) ops.walk(t0, t1);
       for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
-        for (std::uint32_t i = b; i < e; ++i) {
-          t1[i] = Q32::from_raw(round_q32(ops.walk_row(i, t0.data())));  // t_1 = N t_0
-          acc[i] = static_cast<i128>(c0) * t0[i].raw + static_cast<i128>(c1) * t1[i].raw;
-        }
+        for (std::uint32_t i = b; i < e; ++i)
+          acc[i] = static_cast<i128>(c0) * t0[i].raw + (terms > 1 ? static_cast<i128>(coeff.q32[1].raw) * t1[i].raw : 0);
       });
+      for (std::size_t k = 2; k < terms; ++k) {
+        ops.chebyshev_step(t1, t0, t2);
+        const std::int64_t ck = coeff.q32[k].raw;
+        for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
+          for (std::uint32_t i = b; i < e; ++i) acc[i] += static_cast<i128>(ck) * t2[i].raw;
+        });
+        std::swap(t0, t1);
+        std::swap(t1, t2);
+      }
     } else {
-      for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
-        for (std::uint32_t i = b; i < e; ++i) acc[i] = static_cast<i128>(c0) * t0[i].raw;
-      });
-    }
-    for (std::size_t k = 2; k < terms; ++k) {
-      const std::int64_t ck = coeff.q32[k].raw;
+      const std::int64_t c1 = terms > 1 ? coeff.q32[1].raw : 0;
       for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
         for (std::uint32_t i = b; i < e; ++i) {
-          // t_(k+1),i = RNE(2 sum_j N(i, j) t_k,j - t_(k-1),i), one rounding.
-          const i128 exact = 2 * ops.walk_row(i, t1.data()) - (static_cast<i128>(t0[i].raw) << 32);
-          t2[i] = Q32::from_raw(round_q32(exact));
-          acc[i] += static_cast<i128>(ck) * t2[i].raw;
+          acc[i] = static_cast<i128>(c0) * t0[i].raw;
+          if (terms == 1) continue;
+          t1[i] = Q32::from_raw(round_q32(ops.walk_row(i, t0.data())));  // t_1 = N t_0
+          acc[i] += static_cast<i128>(c1) * t1[i].raw;
         }
       });
-      std::swap(t0, t1);
-      std::swap(t1, t2);
+      for (std::size_t k = 2; k < terms; ++k) {
+        const std::int64_t ck = coeff.q32[k].raw;
+        for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
+          for (std::uint32_t i = b; i < e; ++i) {
+            // t_(k+1),i = RNE(2 sum_j N(i, j) t_k,j - t_(k-1),i), one rounding.
+            const i128 exact = 2 * ops.walk_row(i, t1.data()) - (static_cast<i128>(t0[i].raw) << 32);
+            t2[i] = Q32::from_raw(round_q32(exact));
+            acc[i] += static_cast<i128>(ck) * t2[i].raw;
+          }
+        });
+        std::swap(t0, t1);
+        std::swap(t1, t2);
+      }
     }
     // The sub-step result, rounded once; it is the next sub-step's t_0.
     for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {

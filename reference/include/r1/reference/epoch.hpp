@@ -9,6 +9,7 @@
 
 #include "r1/reference/encoding.hpp"
 #include "r1/reference/hierarchy.hpp"
+#include "r1/solvers/focus.hpp"
 #include "r1/solvers/spectral.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/epoch_options.hpp"
@@ -24,11 +25,13 @@ namespace r1 {
 // encoding and hierarchy stages whatever options.parallel says (the same bits, R1-SPEC-071,
 // R1-FOC-090, R1-ENC-020, R1-HIER-070); `fp64`
 // runs those two stages in IEEE doubles whatever options.domain says (R1-EPO-003); `kernels`, when
-// set, are the Q32 spectral kernels the solver runs on (a backend's, the same bits: R1-SOL-002).
+// set, are the Q32 spectral kernels the solver runs on (a backend's, the same bits: R1-SOL-002);
+// `products`, when set, the exact sparse products of the full focus (R1-FOC-092, the same bits).
 class ReferenceStages final : public EpochStages {
  public:
-  explicit ReferenceStages(bool parallel = false, bool fp64 = false, Q32KernelFactory kernels = {})
-      : parallel_(parallel), fp64_(fp64), kernels_(std::move(kernels)) {}
+  explicit ReferenceStages(bool parallel = false, bool fp64 = false, Q32KernelFactory kernels = {},
+                           ExactProductFactory products = {})
+      : parallel_(parallel), fp64_(fp64), kernels_(std::move(kernels)), products_(std::move(products)) {}
 
   Result<Spectrum<Q32>> spectral(const Graph& graph, const EpochOptions& options, const ProgressFn& progress) override;
   Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
@@ -49,6 +52,7 @@ class ReferenceStages final : public EpochStages {
   EpochOptions adjusted(const EpochOptions& options) const;
   bool parallel_, fp64_;
   Q32KernelFactory kernels_;
+  ExactProductFactory products_;
 };
 
 // Runs every stage of `stages` on a snapshot and its layout graph, in the one order of R1-EPO-001;
@@ -74,6 +78,6 @@ Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const 
 Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& options, const ProgressFn& progress,
                                                const Q32KernelFactory& kernels = {});
 Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& options, double lambda2,
-                                         const ProgressFn& progress);
+                                         const ProgressFn& progress, const ExactProductFactory& products = {});
 
 }  // namespace r1

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -13,11 +15,28 @@
 
 namespace r1 {
 
+// A backend's exact Q32 sparse product (R1-FOC-092): over a CSR matrix of raws fixed when it is
+// made, apply(x) returns y_i = RNE(sum_k val_k x_(col_k) / 2^32) for every row, an exact sum
+// rounded once, ties to even (an empty row: x_i when `empty_rows_identity`, else 0). A row that
+// rounds outside int64 is an error, as it is on the host.
+class ExactProduct {
+ public:
+  virtual ~ExactProduct() = default;
+  virtual Result<std::vector<std::int64_t>> apply(std::span<const std::int64_t> x) = 0;
+};
+using ExactProductFactory = std::function<Result<std::unique_ptr<ExactProduct>>(
+    std::span<const std::uint64_t> row_ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
+    bool empty_rows_identity)>;
+
 struct FocusOptions {
   // Runs the row loops of every sparse product on TBB threads. Each row is the same pure
   // function of the previous vector, so the result is bit-identical to the serial one
   // (R1-FOC-090); off by default because the reference is single-threaded.
   bool parallel = false;
+  // When set, the whole-graph products (the walks of the heat kernel and the diffusion's
+  // in-link sums) run on products made by this factory (R1-FOC-092): the same bits. The local
+  // update (update_focus_q32) keeps the row loops.
+  ExactProductFactory products;
 };
 
 // The tri-kernel iteration phi <- Proj(l_d D(phi) + l_s S(phi) + l_h H(phi)) from Proj(u), run for

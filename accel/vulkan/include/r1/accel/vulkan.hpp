@@ -138,6 +138,14 @@ class ExactSpmv {
   std::uint32_t rows() const { return rows_; }
   std::uint32_t columns() const { return columns_; }
 
+  // Owns its buffers: released with it (the context must outlive it).
+  ExactSpmv() = default;
+  ExactSpmv(ExactSpmv&& o) noexcept { *this = std::move(o); }
+  ExactSpmv& operator=(ExactSpmv&& o) noexcept;
+  ExactSpmv(const ExactSpmv&) = delete;
+  ExactSpmv& operator=(const ExactSpmv&) = delete;
+  ~ExactSpmv();
+
  private:
   Context* ctx_ = nullptr;
   std::uint32_t rows_ = 0, columns_ = 0;
