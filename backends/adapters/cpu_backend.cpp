@@ -21,7 +21,9 @@ std::unique_ptr<Backend> make_cpu_backend() {
   summary += level == accel::cpu::Simd::kAvx512Ifma ? " dots and combinations" : level == accel::cpu::Simd::kAvx2 ? " dots" : " none";
   summary += "), focus on TBB row loops, encoding's batched betweenness and hierarchy with their TBB switches; "
              "frame and render the reference's (same bits)";
-  return std::make_unique<StageBackend>("cpu", summary, ReferenceStages(true, false, accel::cpu::kernel_factory(level)),
+  StageKernels kernels;
+  kernels.panel = accel::cpu::kernel_factory(level);
+  return std::make_unique<StageBackend>("cpu", summary, ReferenceStages(true, false, std::move(kernels)),
                                         Domain::kFixedQ32);
 }
 

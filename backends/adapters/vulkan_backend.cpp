@@ -238,34 +238,36 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   // $R1_VULKAN_FOCUS=host keeps them on the host.
   const bool spectral_on_device = on_device_unless("R1_VULKAN_SPECTRAL");
   const bool focus_on_device = on_device_unless("R1_VULKAN_FOCUS");
-  Q32KernelFactory kernels;
+  StageKernels kernels;
   std::string epoch;
   if (spectral_on_device) {
     auto factory = vk::panel_kernel_factory(state->ctx);
     if (!factory.is_ok()) throw std::invalid_argument(factory.status().message());
-    kernels = std::move(factory).value();
-    epoch = "the spectral solver's exact inner products and combinations on the device, its operator on the host";
+    kernels.panel = std::move(factory).value();
+    auto rows = vk::rows_factory(state->ctx);
+    if (!rows.is_ok()) throw std::invalid_argument(rows.status().message());
+    kernels.rows = std::move(rows).value();
+    epoch = "the spectral solver's exact inner products, combinations and operator rows on the device";
   } else {
 #if R1_BACKEND_CPU
     std::string error;
     const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
     if (!error.empty()) throw std::invalid_argument(error);
-    kernels = accel::cpu::kernel_factory(level);
+    kernels.panel = accel::cpu::kernel_factory(level);
     epoch = "the spectral stage the cpu backend's on the host";
 #else
     epoch = "the spectral stage the reference's with its TBB switch, on the host";
 #endif
   }
-  ExactProductFactory products;
   if (focus_on_device) {
-    products = device_products(state->ctx);
+    kernels.focus = device_products(state->ctx);
     epoch += "; the full focus's sparse products (the heat kernel's walks, the diffusion's in-link sums) exact on the device, "
              "its springs, combinations and local updates on the host";
   } else {
     epoch += "; the focus on the host";
   }
   epoch += "; encoding and hierarchy with their TBB switches on the host";
-  ReferenceStages stages(true, false, std::move(kernels), std::move(products));
+  ReferenceStages stages(true, false, std::move(kernels));
   return std::make_unique<StageBackend>(
       "vulkan",
       "on " + name + ": the T1/T2 impostor pass " +

@@ -54,20 +54,21 @@ Result<Spectrum<Q32>> to_q32(const Spectrum<double>& s) {
 }  // namespace
 
 Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& o, const ProgressFn& progress,
-                                               const Q32KernelFactory& kernels) {
+                                               const StageKernels& kernels) {
   SpectralOptions so;
   so.parallel = o.parallel;
-  so.q32_kernels = kernels;
+  so.q32_kernels = kernels.panel;
+  so.q32_rows = kernels.rows;
   if (o.domain == NumericDomain::kQ32) return spectral_embedding_q32(graph, o.spectral, progress, so);
   R1_ASSIGN(const Spectrum<double> s, spectral_embedding_f64(graph, o.spectral, progress, so));
   return to_q32(s);
 }
 
 Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& o, double lambda2, const ProgressFn& progress,
-                                         const ExactProductFactory& products) {
+                                         const StageKernels& kernels) {
   FocusOptions fo;
   fo.parallel = o.parallel;
-  fo.products = products;
+  fo.products = kernels.focus;
   if (o.domain == NumericDomain::kQ32) return compute_focus_q32(graph, o.trikernel, lambda2, progress, fo);
   R1_ASSIGN(const Focus<double> f, compute_focus_f64(graph, o.trikernel, lambda2, progress, fo));
   Focus<Q32> q;
@@ -93,8 +94,8 @@ Result<Spectrum<Q32>> ReferenceStages::spectral(const Graph& g, const EpochOptio
 }
 
 Result<Focus<Q32>> ReferenceStages::focus(const Graph& g, const EpochOptions& o, double lambda2, const ProgressFn& p) {
-  if (!parallel_ && !fp64_) return reference_focus_stage(g, o, lambda2, p, products_);
-  return reference_focus_stage(g, adjusted(o), lambda2, p, products_);
+  if (!parallel_ && !fp64_) return reference_focus_stage(g, o, lambda2, p, kernels_);
+  return reference_focus_stage(g, adjusted(o), lambda2, p, kernels_);
 }
 
 Result<Focus<Q32>> ReferenceStages::focus_update(const Graph& g, const EpochOptions& o, double lambda2,

@@ -147,6 +147,12 @@ template <class Scalar>
 Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, const ProgressFn& progress,
                                const SpectralOptions& options, Result<SpectralOperator<Scalar>> op_result) {
   if (!op_result) return op_result.status();
+  if constexpr (std::is_same_v<Scalar, fx::Q32>) {
+    if (options.q32_rows) {
+      op_result->rows = options.q32_rows(*op_result);
+      if (op_result->rows == nullptr) throw std::runtime_error("spectral: the backend made no operator rows");
+    }
+  }
   const SpectralOperator<Scalar>& op = *op_result;
   Spectrum<Scalar> out;
   out.n = g.n;

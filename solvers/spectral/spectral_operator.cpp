@@ -182,6 +182,11 @@ void SpectralOperator<fx::Q32>::apply_block(const fx::Q32* x, std::size_t ldx, f
       c[col] = total.round_shift(32);
     }
   }
+  if (rows != nullptr && ldx == count && ldy == count) {
+    // A backend's rows (R1-SPEC-073): the same exact sums, rounded once.
+    rows->apply(x, g.empty() ? std::span<const std::int64_t>() : std::span<const std::int64_t>(c), y, count);
+    return;
+  }
   const i128 one = i128{1} << 32;
   spectral::for_row_blocks(n, par, [&](std::size_t lo, std::size_t hi) {
     // Unsigned: a speculative sum may wrap (defined behaviour); it is used only when it cannot.

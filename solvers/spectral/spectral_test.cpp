@@ -255,6 +255,53 @@ TEST(Spectral, RerunsAndTbbAreBitIdentical) {
   EXPECT_EQ(spectrum_digest(*fa), spectrum_digest(*fc));
 }
 
+// A backend's rows written from R1-SPEC-073's definition alone (an i128 sum of the row's terms,
+// floored and rounded half to even by hand), counting its block applications.
+class PlainRows final : public r1::spectral::BlockRows {
+ public:
+  PlainRows(const r1::SpectralOperator<r1::fx::Q32>& op, int* calls) : op_(op), calls_(calls) {}
+  void apply(const r1::fx::Q32* x, std::span<const std::int64_t> coef, r1::fx::Q32* y, std::size_t count) override {
+    ++*calls_;
+    const r1::Graph& g = *op_.graph;
+    for (std::uint32_t i = 0; i < op_.n; ++i)
+      for (std::size_t c = 0; c < count; ++c) {
+        r1::i128 sum = static_cast<r1::i128>(x[i * count + c].raw) << 32;
+        for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k)
+          sum -= static_cast<r1::i128>(op_.m[k].raw) * x[std::size_t{g.col[k]} * count + c].raw;
+        if (!coef.empty()) sum -= static_cast<r1::i128>(op_.g[i].raw) * coef[c];
+        r1::i128 q = sum >> 32;
+        const r1::i128 rem = sum - q * (r1::i128{1} << 32);
+        if (rem > (r1::i128{1} << 31) || (rem == (r1::i128{1} << 31) && (q & 1) != 0)) ++q;
+        y[i * count + c] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(q));
+      }
+  }
+
+ private:
+  const r1::SpectralOperator<r1::fx::Q32>& op_;
+  int* calls_;
+};
+
+// R1-SPEC-073: the solver on a backend's rows gives the host's bits, with and without the
+// rank-one term (a BA graph; two rings, rho = 2) and on the dense path (a 40-ring).
+TEST(Spectral, ABackendsRowsGiveTheHostsBits) {
+  std::vector<std::tuple<std::string, std::string, std::uint64_t>> links;
+  for (int i = 0; i < 60; ++i) links.emplace_back("a" + std::to_string(i), "a" + std::to_string((i + 1) % 60), 1);
+  for (int i = 0; i < 80; ++i) links.emplace_back("b" + std::to_string(i), "b" + std::to_string((i + 1) % 80), 3);
+  for (const r1::Graph& g : {generated(r1::GenKind::kBa, 600), from_links(links), generated(r1::GenKind::kRing, 40)}) {
+    int calls = 0;
+    r1::SpectralOptions on;
+    on.q32_rows = [&calls](const r1::SpectralOperator<r1::fx::Q32>& op) -> std::unique_ptr<r1::spectral::BlockRows> {
+      return std::make_unique<PlainRows>(op, &calls);
+    };
+    auto want = r1::spectral_embedding_q32(g, defaults());
+    auto got = r1::spectral_embedding_q32(g, defaults(), {}, on);
+    ASSERT_TRUE(want.is_ok() && got.is_ok());
+    EXPECT_EQ(spectrum_digest(*got), spectrum_digest(*want)) << g.n;
+    EXPECT_EQ(got->matvecs, want->matvecs);
+    EXPECT_GT(calls, 0) << g.n;
+  }
+}
+
 TEST(Spectral, MatrixMarketExportIsTheOperator) {
   const r1::Graph g = from_links({{"a", "b", 1}, {"b", "c", 3}, {"c", "a", 2}, {"c", "d", 1}, {"e", "f", 1}});
   auto op = r1::spectral_operator_q32(g, defaults());  // disconnected: rho > 0, rank-one lines

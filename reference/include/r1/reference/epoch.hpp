@@ -21,17 +21,23 @@
 
 namespace r1 {
 
+// A backend's kernels for the reference's stages, each optional, each giving the same bits: the
+// spectral solver's panel kernels (R1-SOL-002) and operator rows (R1-SPEC-073), and the full
+// focus's exact products (R1-FOC-092).
+struct StageKernels {
+  Q32KernelFactory panel;
+  Q32RowsFactory rows;
+  ExactProductFactory focus;
+};
+
 // The cpu-reference's epoch stages. `parallel` turns on the TBB loops of the spectral, focus,
 // encoding and hierarchy stages whatever options.parallel says (the same bits, R1-SPEC-071,
-// R1-FOC-090, R1-ENC-020, R1-HIER-070); `fp64`
-// runs those two stages in IEEE doubles whatever options.domain says (R1-EPO-003); `kernels`, when
-// set, are the Q32 spectral kernels the solver runs on (a backend's, the same bits: R1-SOL-002);
-// `products`, when set, the exact sparse products of the full focus (R1-FOC-092, the same bits).
+// R1-FOC-090, R1-ENC-020, R1-HIER-070); `fp64` runs those two stages in IEEE doubles whatever
+// options.domain says (R1-EPO-003); `kernels` are a backend's (the same bits).
 class ReferenceStages final : public EpochStages {
  public:
-  explicit ReferenceStages(bool parallel = false, bool fp64 = false, Q32KernelFactory kernels = {},
-                           ExactProductFactory products = {})
-      : parallel_(parallel), fp64_(fp64), kernels_(std::move(kernels)), products_(std::move(products)) {}
+  explicit ReferenceStages(bool parallel = false, bool fp64 = false, StageKernels kernels = {})
+      : parallel_(parallel), fp64_(fp64), kernels_(std::move(kernels)) {}
 
   Result<Spectrum<Q32>> spectral(const Graph& graph, const EpochOptions& options, const ProgressFn& progress) override;
   Result<Focus<Q32>> focus(const Graph& graph, const EpochOptions& options, double lambda2,
@@ -51,8 +57,7 @@ class ReferenceStages final : public EpochStages {
  private:
   EpochOptions adjusted(const EpochOptions& options) const;
   bool parallel_, fp64_;
-  Q32KernelFactory kernels_;
-  ExactProductFactory products_;
+  StageKernels kernels_;
 };
 
 // Runs every stage of `stages` on a snapshot and its layout graph, in the one order of R1-EPO-001;
@@ -76,8 +81,8 @@ Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const 
 // The reference stages alone, as ReferenceStages calls them (options.domain and options.parallel
 // decide).
 Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOptions& options, const ProgressFn& progress,
-                                               const Q32KernelFactory& kernels = {});
+                                               const StageKernels& kernels = {});
 Result<Focus<Q32>> reference_focus_stage(const Graph& graph, const EpochOptions& options, double lambda2,
-                                         const ProgressFn& progress, const ExactProductFactory& products = {});
+                                         const ProgressFn& progress, const StageKernels& kernels = {});
 
 }  // namespace r1

@@ -20,7 +20,23 @@ namespace r1 {
 namespace spectral {
 template <class Scalar>
 class PanelOps;
-}
+
+// A backend's rows of the Q32 operator (R1-SPEC-073): for `count` columns of a compact n x count
+// block (row i, column c at x[i * count + c]) and their rank-one coefficients `coef` (empty when
+// rho = 0), y_i,c = RNE((x_i,c 2^32 - sum_k M_ik x_k,c - g_i coef_c) / 2^32), the exact sum rounded
+// once: SpectralOperator<Q32>::apply_block's rows bit for bit. A row outside Q32 throws
+// fx::OverflowError; a device failure std::runtime_error.
+class BlockRows {
+ public:
+  virtual ~BlockRows() = default;
+  virtual void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) = 0;
+};
+}  // namespace spectral
+
+template <class Scalar>
+struct SpectralOperator;
+// Makes a backend's rows for an operator (which outlives them).
+using Q32RowsFactory = std::function<std::unique_ptr<spectral::BlockRows>(const SpectralOperator<fx::Q32>& op)>;
 
 // The Q32 kernels for a panel of n rows under the scaled inner product 2^-e with frac fraction
 // bits (spectral::PanelOps's constructor arguments).
@@ -68,6 +84,9 @@ struct SpectralOptions {
   // The Q32 vector kernels the driver runs on (R1-SOL-002); empty: the portable ones
   // (spectral::PanelOps). A backend passes its own here; the bytes must not change.
   Q32KernelFactory q32_kernels;
+  // The Q32 operator's rows for the solver's block applications (R1-SPEC-073); empty: the
+  // host's. The bytes must not change.
+  Q32RowsFactory q32_rows;
 };
 
 // The operator the solver iterates on (R1-SPEC-001..006), for export and tests:
@@ -83,6 +102,8 @@ struct SpectralOperator {
   std::vector<Scalar> m;         // per stored entry of the graph, M_ij
   std::vector<Scalar> g;         // rank-one factor; empty when rho = 0
   std::vector<Scalar> trivial;   // D^(1/2) 1, squared length 2^e
+  // Q32: a backend's rows (SpectralOptions::q32_rows), which apply_block runs compact blocks on.
+  std::shared_ptr<spectral::BlockRows> rows;
 
   // y = L~ x (R1-SPEC-005): Q32, every row one exact sum rounded once; fp64, fixed pairwise rows.
   void apply(const Scalar* x, Scalar* y, bool parallel = false) const { apply_block(x, 1, y, 1, 1, parallel); }

@@ -1,0 +1,187 @@
+// The spectral operator's rows on a Vulkan device (R1-SPEC-073, R1-BKD-071): for a compact block
+// of columns, x_i 2^32 - sum_k M_ik x_k - g_i coef in 192 bits, rounded once by 2^32, ties to even,
+// so the solver's block applications are the host's bits (SpectralOperator<Q32>::apply_block).
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "r1/accel/vulkan_panel.hpp"
+#include "shader_common.hpp"
+
+namespace r1::vk {
+
+namespace {
+
+constexpr const char* kVersion = "#version 460\n#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require\n";
+constexpr std::uint32_t kGroupCols = 8;  // columns one invocation sums at once (accumulators it holds)
+
+// Invocation i sums row i for columns col0 .. col0 + cols - 1 of the block (cols <= 8).
+constexpr const char* kRows = R"(
+layout(std430, binding = 0) readonly buffer R { uint64_t row_ptr[]; };
+layout(std430, binding = 1) readonly buffer C { uint col[]; };
+layout(std430, binding = 2) readonly buffer M { int64_t m[]; };
+layout(std430, binding = 3) readonly buffer G { int64_t g[]; };
+layout(std430, binding = 4) readonly buffer X { int64_t x[]; };
+layout(std430, binding = 5) readonly buffer K { int64_t coef[]; };
+layout(std430, binding = 6) writeonly buffer Y { int64_t y[]; };
+layout(std430, binding = 7) buffer F { uint first_overflow; };
+layout(push_constant) uniform P { uint rows; uint count; uint col0; uint cols; uint has_g; } p;
+void main() {
+  uint i = invocation();
+  if (i >= p.rows) return;
+  uint64_t s[24];
+  for (uint a = 0u; a < p.cols; ++a) {
+    uint64_t ph, pl;
+    mul128(x[i * p.count + p.col0 + a], 4294967296l, ph, pl);
+    s[3u * a] = pl;
+    s[3u * a + 1u] = ph;
+    s[3u * a + 2u] = int64_t(ph) < 0l ? ~0ul : 0ul;
+  }
+  uint b = uint(row_ptr[i]), e = uint(row_ptr[i + 1u]);
+  for (uint k = b; k < e; ++k) {
+    int64_t mk = -m[k];
+    uint base = col[k] * p.count + p.col0;
+    for (uint a = 0u; a < p.cols; ++a) {
+      uint64_t ph, pl, t[3];
+      mul128(mk, x[base + a], ph, pl);
+      t[0] = s[3u * a]; t[1] = s[3u * a + 1u]; t[2] = s[3u * a + 2u];
+      add128(t, ph, pl);
+      s[3u * a] = t[0]; s[3u * a + 1u] = t[1]; s[3u * a + 2u] = t[2];
+    }
+  }
+  for (uint a = 0u; a < p.cols; ++a) {
+    uint64_t t[3];
+    t[0] = s[3u * a]; t[1] = s[3u * a + 1u]; t[2] = s[3u * a + 2u];
+    if (p.has_g != 0u) {
+      uint64_t ph, pl;
+      mul128(-g[i], coef[p.col0 + a], ph, pl);
+      add128(t, ph, pl);
+    }
+    uint64_t q0 = (t[0] >> 32) | (t[1] << 32), q1 = (t[1] >> 32) | (t[2] << 32);
+    uint64_t q2 = uint64_t(int64_t(t[2]) >> 32);
+    uint64_t rem = t[0] & 0xfffffffful;
+    if (rem > 0x80000000ul || (rem == 0x80000000ul && (q0 & 1ul) != 0ul)) {
+      q0 += 1ul;
+      if (q0 == 0ul) {
+        q1 += 1ul;
+        if (q1 == 0ul) q2 += 1ul;
+      }
+    }
+    uint64_t ext = uint64_t(int64_t(q0) >> 63);
+    if (q1 != ext || q2 != ext) {
+      atomicMin(first_overflow, i);
+      y[i * p.count + p.col0 + a] = 0l;
+      continue;
+    }
+    y[i * p.count + p.col0 + a] = int64_t(q0);
+  }
+}
+)";
+
+struct Shared {
+  std::shared_ptr<Context> ctx;
+  std::uint32_t pipeline = 0;
+  std::mutex lock;
+};
+
+void ok(const Status& st) {
+  if (!st.is_ok()) throw std::runtime_error(st.message());
+}
+
+template <class T>
+std::uint32_t uploaded(Context& ctx, std::span<const T> v) {
+  auto id = ctx.buffer_create(std::max<std::size_t>(v.size_bytes(), 8));
+  ok(id.status());
+  if (!v.empty()) ok(ctx.buffer_write(*id, detail::bytes_of(v), 0));
+  return *id;
+}
+
+class VulkanRows final : public spectral::BlockRows {
+ public:
+  VulkanRows(std::shared_ptr<Shared> shared, const SpectralOperator<fx::Q32>& op) : s_(std::move(shared)) {
+    const Graph& g = *op.graph;
+    rows_ = op.n;
+    if (g.col.size() >= 0xffffffffu) throw std::runtime_error("vulkan spectral rows: 2^32 - 1 stored entries at most");
+    std::lock_guard<std::mutex> guard(s_->lock);
+    Context& ctx = *s_->ctx;
+    std::vector<std::int64_t> m(op.m.size()), gv(op.g.size());
+    for (std::size_t k = 0; k < m.size(); ++k) m[k] = op.m[k].raw;
+    for (std::size_t k = 0; k < gv.size(); ++k) gv[k] = op.g[k].raw;
+    has_g_ = !gv.empty();
+    buffers_[0] = uploaded(ctx, std::span<const std::uint64_t>(g.row_ptr));
+    buffers_[1] = uploaded(ctx, std::span<const std::uint32_t>(g.col));
+    buffers_[2] = uploaded(ctx, std::span<const std::int64_t>(m));
+    buffers_[3] = uploaded(ctx, std::span<const std::int64_t>(gv));
+  }
+  ~VulkanRows() override {
+    std::lock_guard<std::mutex> guard(s_->lock);
+    for (const std::uint32_t id : buffers_) s_->ctx->buffer_release(id);  // 0 (never made): a no-op
+  }
+  VulkanRows(const VulkanRows&) = delete;
+  VulkanRows& operator=(const VulkanRows&) = delete;
+
+  void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) override {
+    if (count == 0) return;
+    if (has_g_ && coef.size() != count) throw std::runtime_error("vulkan spectral rows: one coefficient a column");
+    std::lock_guard<std::mutex> guard(s_->lock);
+    Context& ctx = *s_->ctx;
+    const std::size_t entries = std::size_t{rows_} * count;
+    std::vector<std::int64_t> xs(entries);
+    for (std::size_t k = 0; k < entries; ++k) xs[k] = x[k].raw;
+    ok(ctx.buffer_ensure(buffers_[4], entries * 8));
+    ok(ctx.buffer_write(buffers_[4], detail::bytes_of(std::span<const std::int64_t>(xs)), 0));
+    const std::vector<std::int64_t> cs = has_g_ ? std::vector<std::int64_t>(coef.begin(), coef.end()) : std::vector<std::int64_t>(count, 0);
+    ok(ctx.buffer_ensure(buffers_[5], count * 8));
+    ok(ctx.buffer_write(buffers_[5], detail::bytes_of(std::span<const std::int64_t>(cs)), 0));
+    ok(ctx.buffer_ensure(buffers_[6], entries * 8));
+    ok(ctx.buffer_ensure(buffers_[7], 4));
+    const std::uint32_t none = 0xffffffffu;
+    ok(ctx.buffer_write(buffers_[7], std::span(reinterpret_cast<const std::uint8_t*>(&none), 4), 0));
+    const Slot slots[] = {{0, buffers_[0]}, {1, buffers_[1]}, {2, buffers_[2]}, {3, buffers_[3]},
+                          {4, buffers_[4]}, {5, buffers_[5]}, {6, buffers_[6]}, {7, buffers_[7]}};
+    for (std::size_t col0 = 0; col0 < count; col0 += kGroupCols) {
+      const std::array<std::uint32_t, 5> push = {rows_, static_cast<std::uint32_t>(count), static_cast<std::uint32_t>(col0),
+                                                 static_cast<std::uint32_t>(std::min<std::size_t>(kGroupCols, count - col0)),
+                                                 has_g_ ? 1u : 0u};
+      std::array<std::uint8_t, 20> bytes{};
+      std::memcpy(bytes.data(), push.data(), bytes.size());
+      ok(ctx.dispatch(s_->pipeline, slots, detail::groups_for(rows_), bytes));
+    }
+    auto flag = ctx.buffer_read(buffers_[7], 0, 4);
+    ok(flag.status());
+    std::uint32_t first = 0;
+    std::memcpy(&first, flag->data(), 4);
+    if (first != none)
+      throw fx::OverflowError("spectral round (device, row " + std::to_string(first) + ")");
+    auto out = ctx.buffer_read(buffers_[6], 0, entries * 8);
+    ok(out.status());
+    for (std::size_t k = 0; k < entries; ++k) {
+      std::int64_t v = 0;
+      std::memcpy(&v, out->data() + k * 8, 8);
+      y[k] = fx::Q32::from_raw(v);
+    }
+  }
+
+ private:
+  std::shared_ptr<Shared> s_;
+  std::uint32_t rows_ = 0;
+  bool has_g_ = false;
+  // row_ptr, col, m, g, then the block, the coefficients, the result and the overflow flag.
+  std::array<std::uint32_t, 8> buffers_{};
+};
+
+}  // namespace
+
+Result<Q32RowsFactory> rows_factory(std::shared_ptr<Context> ctx) {
+  auto shared = std::make_shared<Shared>();
+  shared->ctx = std::move(ctx);
+  R1_ASSIGN(shared->pipeline, shared->ctx->compute_compile(std::string(kVersion) + detail::kWideInt + kRows, "spectral_rows"));
+  return Q32RowsFactory([shared](const SpectralOperator<fx::Q32>& op) -> std::unique_ptr<spectral::BlockRows> {
+    return std::make_unique<VulkanRows>(shared, op);
+  });
+}
+
+}  // namespace r1::vk
