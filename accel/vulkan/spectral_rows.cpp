@@ -16,9 +16,11 @@ namespace r1::vk {
 namespace {
 
 constexpr const char* kVersion = "#version 460\n#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require\n";
-constexpr std::uint32_t kGroupCols = 8;  // columns one invocation sums at once (accumulators it holds)
+// One invocation per (row, column) of the block: its loop runs over the row's stored entries.
+// llvmpipe (lavapipe) stops a loop nest after 65535 iterations, so an operator with a longer row
+// is declined (the host's rows run it).
+constexpr std::uint64_t kLongestRow = 65000;
 
-// Invocation i sums row i for columns col0 .. col0 + cols - 1 of the block (cols <= 8).
 constexpr const char* kRows = R"(
 layout(std430, binding = 0) readonly buffer R { uint64_t row_ptr[]; };
 layout(std430, binding = 1) readonly buffer C { uint col[]; };
@@ -28,56 +30,42 @@ layout(std430, binding = 4) readonly buffer X { int64_t x[]; };
 layout(std430, binding = 5) readonly buffer K { int64_t coef[]; };
 layout(std430, binding = 6) writeonly buffer Y { int64_t y[]; };
 layout(std430, binding = 7) buffer F { uint first_overflow; };
-layout(push_constant) uniform P { uint rows; uint count; uint col0; uint cols; uint has_g; } p;
+layout(push_constant) uniform P { uint rows; uint count; uint has_g; } p;
 void main() {
-  uint i = invocation();
-  if (i >= p.rows) return;
-  uint64_t s[24];
-  for (uint a = 0u; a < p.cols; ++a) {
-    uint64_t ph, pl;
-    mul128(x[i * p.count + p.col0 + a], 4294967296l, ph, pl);
-    s[3u * a] = pl;
-    s[3u * a + 1u] = ph;
-    s[3u * a + 2u] = int64_t(ph) < 0l ? ~0ul : 0ul;
-  }
+  uint v = invocation();
+  if (v >= p.rows * p.count) return;
+  uint i = v / p.count, a = v % p.count;
+  uint64_t s[3], ph, pl;
+  mul128(x[v], 4294967296l, ph, pl);
+  s[0] = pl;
+  s[1] = ph;
+  s[2] = int64_t(ph) < 0l ? ~0ul : 0ul;
   uint b = uint(row_ptr[i]), e = uint(row_ptr[i + 1u]);
   for (uint k = b; k < e; ++k) {
-    int64_t mk = -m[k];
-    uint base = col[k] * p.count + p.col0;
-    for (uint a = 0u; a < p.cols; ++a) {
-      uint64_t ph, pl, t[3];
-      mul128(mk, x[base + a], ph, pl);
-      t[0] = s[3u * a]; t[1] = s[3u * a + 1u]; t[2] = s[3u * a + 2u];
-      add128(t, ph, pl);
-      s[3u * a] = t[0]; s[3u * a + 1u] = t[1]; s[3u * a + 2u] = t[2];
+    mul128(-m[k], x[col[k] * p.count + a], ph, pl);
+    add128(s, ph, pl);
+  }
+  if (p.has_g != 0u) {
+    mul128(-g[i], coef[a], ph, pl);
+    add128(s, ph, pl);
+  }
+  uint64_t q0 = (s[0] >> 32) | (s[1] << 32), q1 = (s[1] >> 32) | (s[2] << 32);
+  uint64_t q2 = uint64_t(int64_t(s[2]) >> 32);
+  uint64_t rem = s[0] & 0xfffffffful;
+  if (rem > 0x80000000ul || (rem == 0x80000000ul && (q0 & 1ul) != 0ul)) {
+    q0 += 1ul;
+    if (q0 == 0ul) {
+      q1 += 1ul;
+      if (q1 == 0ul) q2 += 1ul;
     }
   }
-  for (uint a = 0u; a < p.cols; ++a) {
-    uint64_t t[3];
-    t[0] = s[3u * a]; t[1] = s[3u * a + 1u]; t[2] = s[3u * a + 2u];
-    if (p.has_g != 0u) {
-      uint64_t ph, pl;
-      mul128(-g[i], coef[p.col0 + a], ph, pl);
-      add128(t, ph, pl);
-    }
-    uint64_t q0 = (t[0] >> 32) | (t[1] << 32), q1 = (t[1] >> 32) | (t[2] << 32);
-    uint64_t q2 = uint64_t(int64_t(t[2]) >> 32);
-    uint64_t rem = t[0] & 0xfffffffful;
-    if (rem > 0x80000000ul || (rem == 0x80000000ul && (q0 & 1ul) != 0ul)) {
-      q0 += 1ul;
-      if (q0 == 0ul) {
-        q1 += 1ul;
-        if (q1 == 0ul) q2 += 1ul;
-      }
-    }
-    uint64_t ext = uint64_t(int64_t(q0) >> 63);
-    if (q1 != ext || q2 != ext) {
-      atomicMin(first_overflow, i);
-      y[i * p.count + p.col0 + a] = 0l;
-      continue;
-    }
-    y[i * p.count + p.col0 + a] = int64_t(q0);
+  uint64_t ext = uint64_t(int64_t(q0) >> 63);
+  if (q1 != ext || q2 != ext) {
+    atomicMin(first_overflow, i);
+    y[v] = 0l;
+    return;
   }
+  y[v] = int64_t(q0);
 }
 )";
 
@@ -142,14 +130,11 @@ class VulkanRows final : public spectral::BlockRows {
     ok(ctx.buffer_write(buffers_[7], std::span(reinterpret_cast<const std::uint8_t*>(&none), 4), 0));
     const Slot slots[] = {{0, buffers_[0]}, {1, buffers_[1]}, {2, buffers_[2]}, {3, buffers_[3]},
                           {4, buffers_[4]}, {5, buffers_[5]}, {6, buffers_[6]}, {7, buffers_[7]}};
-    for (std::size_t col0 = 0; col0 < count; col0 += kGroupCols) {
-      const std::array<std::uint32_t, 5> push = {rows_, static_cast<std::uint32_t>(count), static_cast<std::uint32_t>(col0),
-                                                 static_cast<std::uint32_t>(std::min<std::size_t>(kGroupCols, count - col0)),
-                                                 has_g_ ? 1u : 0u};
-      std::array<std::uint8_t, 20> bytes{};
-      std::memcpy(bytes.data(), push.data(), bytes.size());
-      ok(ctx.dispatch(s_->pipeline, slots, detail::groups_for(rows_), bytes));
-    }
+    if (entries >= 0xffffffffu) throw std::runtime_error("vulkan spectral rows: 2^32 - 1 block entries at most");
+    const std::array<std::uint32_t, 3> push = {rows_, static_cast<std::uint32_t>(count), has_g_ ? 1u : 0u};
+    std::array<std::uint8_t, 12> bytes{};
+    std::memcpy(bytes.data(), push.data(), bytes.size());
+    ok(ctx.dispatch(s_->pipeline, slots, detail::groups_for(entries), bytes));
     auto flag = ctx.buffer_read(buffers_[7], 0, 4);
     ok(flag.status());
     std::uint32_t first = 0;
@@ -180,6 +165,9 @@ Result<Q32RowsFactory> rows_factory(std::shared_ptr<Context> ctx) {
   shared->ctx = std::move(ctx);
   R1_ASSIGN(shared->pipeline, shared->ctx->compute_compile(std::string(kVersion) + detail::kWideInt + kRows, "spectral_rows"));
   return Q32RowsFactory([shared](const SpectralOperator<fx::Q32>& op) -> std::unique_ptr<spectral::BlockRows> {
+    const Graph& g = *op.graph;
+    for (std::uint32_t i = 0; i < op.n; ++i)
+      if (g.row_ptr[i + 1] - g.row_ptr[i] > kLongestRow) return nullptr;  // declined: the host's rows
     return std::make_unique<VulkanRows>(shared, op);
   });
 }

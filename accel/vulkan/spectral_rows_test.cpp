@@ -1,8 +1,9 @@
 // The spectral operator's rows on a Vulkan device against the host's (R1-SPEC-073, R1-BKD-071):
-// SpectralOperator<Q32>::apply_block with and without the device's rows, bit for bit, on a
-// graph with rho = 0 and one with rho > 0 (the rank-one term), blocks of 1, 7 and 11
-// columns (two column groups), entries of every magnitude up to 58 bits (row sums past 2^128), exact
-// ties of both parities, and the same refusal of a row outside Q32. Skips without a device unless R1_REQUIRE_VULKAN is set.
+// SpectralOperator<Q32>::apply_block with and without the device's rows, bit for bit, on a graph
+// with rho = 0 and one with rho > 0 (the rank-one term), blocks of 1, 7 and 11 columns, entries of
+// every magnitude up to 58 bits (row sums past 2^128), exact ties of both parities, the same
+// refusal of a row outside Q32, and a hub too long for a lavapipe loop declined. Skips without a
+// device unless R1_REQUIRE_VULKAN is set.
 #include "r1/accel/vulkan_panel.hpp"
 
 #include <gtest/gtest.h>
@@ -96,6 +97,11 @@ TEST(VulkanSpectralRows, TheDevicesRowsAreTheHostsBitForBit) {
     EXPECT_THROW(host->apply_block(x.data(), 2, y.data(), 2, 2), fx::OverflowError);
     EXPECT_THROW(device.apply_block(x.data(), 2, y.data(), 2, 2), fx::OverflowError);
   }
+  // A row longer than a lavapipe loop may run: declined, so the host's rows run that operator.
+  const Graph star = graph_of(GenKind::kStar, 70000);
+  auto op = spectral_operator_q32(star, SpectralParams{});
+  ASSERT_TRUE(op.is_ok());
+  EXPECT_EQ((*factory)(*op), nullptr);
 }
 
 }  // namespace

@@ -4,7 +4,9 @@
 // work on the host (the reference's passes, the cpu backend's stages). Its epochs are the
 // reference's bytes. Its 13.1 device is the Vulkan device on the same context.
 #include <cstdlib>
+#include <algorithm>
 #include <memory>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -44,9 +46,15 @@ bool on_device_unless(const char* var) {
   return m == "device";
 }
 
+// A row longer than this is declined (the focus keeps its row loops): the kernel loops over a
+// row's entries, and llvmpipe (lavapipe) stops a loop nest after 65535 iterations.
+constexpr std::uint64_t kLongestRow = 65000;
+
 ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
   return [ctx](std::span<const std::uint64_t> ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
                bool identity) -> Result<std::unique_ptr<ExactProduct>> {
+    for (std::size_t i = 0; i + 1 < ptr.size(); ++i)
+      if (ptr[i + 1] - ptr[i] > kLongestRow) return std::unique_ptr<ExactProduct>();
     R1_ASSIGN(vk::ExactSpmv spmv, vk::ExactSpmv::build(*ctx, ptr, col, val, identity));
     return std::unique_ptr<ExactProduct>(std::make_unique<DeviceProduct>(ctx, std::move(spmv)));
   };
@@ -54,6 +62,7 @@ ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
 
 struct PassState {
   std::shared_ptr<vk::Context> ctx;
+  vk::DepthSort splat_sort;
   vk::ImpostorPass impostors;
   vk::CompositePass composite;
 };
@@ -224,6 +233,10 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   auto composite = vk::CompositePass::build(*state->ctx, reference_exp_constants(), max_candidates);
   if (!composite.is_ok()) throw std::invalid_argument(composite.status().message());
   state->composite = std::move(composite).value();
+  // The splats' depth sort (R1-BKD-072, R1-RND-079); beyond the device sort's keys, the host's.
+  auto sort = vk::DepthSort::build(*state->ctx);
+  if (!sort.is_ok()) throw std::invalid_argument(sort.status().message());
+  state->splat_sort = std::move(sort).value();
   auto device = make_vulkan_device_on(state->ctx);
   if (!device.is_ok()) throw std::invalid_argument(device.status().message());
   const std::string name = (*device)->describe();
@@ -232,6 +245,16 @@ std::unique_ptr<Backend> make_vulkan_backend() {
                              render::OpaqueLayer& layer) { return draw_on_device(*state, list, v, f, layer); };
   passes.composite = [state](const render::CompositeInput& in, render::Image& image, render::FrameStats& st) {
     return composite_on_device(*state, in, image, st);
+  };
+  passes.splat_sort = [state](std::span<const double> depth, std::vector<std::uint32_t>& order) -> Status {
+    if (depth.size() > vk::DepthSort::kMaxKeys) {
+      order.resize(depth.size());
+      std::iota(order.begin(), order.end(), 0u);
+      std::stable_sort(order.begin(), order.end(), [&depth](std::uint32_t a, std::uint32_t b) { return depth[a] < depth[b]; });
+      return Status::ok();
+    }
+    R1_ASSIGN(order, state->splat_sort.order(depth));
+    return Status::ok();
   };
   // The spectral solver's inner products and combinations on the device (R1-BKD-069) and the full
   // focus's sparse products (R1-FOC-092, R1-BKD-064), unless $R1_VULKAN_SPECTRAL=host or
@@ -275,7 +298,7 @@ std::unique_ptr<Backend> make_vulkan_backend() {
                                                      : "a compute shader over 16-pixel tiles") +
           " ray-casting in fp64 with the reference's intersections; the T-infinity field and composite a compute shader "
           "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes, and frames drawn with the neural "
-          "field, on the host); cull, edges, splat "
+          "field, on the host); the splats' depth sort a radix sort on the device; cull, edges, splat "
           "binning and labels the reference's on the host; " + epoch + " (the reference's bytes)",
       std::move(stages), Domain::kFixedQ32, std::move(passes), std::move(device).value());
 }

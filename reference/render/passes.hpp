@@ -90,7 +90,14 @@ struct SplatBins {
   int tiles_x = 0, tiles_y = 0;
   std::vector<std::vector<std::uint32_t>> tiles;
 };
-SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled);
+// A backend's splat sort (R1-RND-079): `order` becomes the permutation that puts `depth` in
+// ascending order, equal depths in index order (a stable sort). Every depth is positive and finite.
+using SplatSortPass = std::function<Status(std::span<const double> depth, std::vector<std::uint32_t>& order)>;
+// With `sort`, the splats (made in ascending particle order) are put in its order, which is the
+// reference's when the pass keeps its contract; an order that is no permutation is an internal
+// error. Splat depths that are not all positive and finite are sorted on the host.
+Result<SplatBins> bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled,
+                             const SplatSortPass& sort = {});
 
 // What the field and composite pass reads (R1-RND-078): the opaque layer after impostors and
 // edges, the binned splats, and the frame's scene, view and options (the field is built from
@@ -136,6 +143,7 @@ class PixelCompositor {
 struct FramePasses {
   ImpostorPass impostors;
   CompositePass composite;
+  SplatSortPass splat_sort;
 };
 
 }  // namespace r1::render

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 
 #include "r1/fixedpoint/counter_rng.hpp"
@@ -597,6 +598,48 @@ TEST(ViewFile, RoundTripsAndRefusesBadValues) {
   EXPECT_NE(error("[image]\nwidth = 0\n").find("bad.toml:2: expected an integer in [1, 16384]"), std::string::npos);
   EXPECT_NE(error("[camera]\norientation = [2, 0, 0, 0]\n").find("unit quaternion"), std::string::npos);
   EXPECT_NE(error("[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, 0]\n").find("coincide"), std::string::npos);
+}
+
+// R1-RND-079: a backend's splat sort that keeps its contract (a stable sort by depth; here
+// std::stable_sort) gives bin_splats' bins exactly; one that returns no permutation is an
+// internal error. Equal depths come from particles on one plane facing the camera.
+TEST(Splat, ABackendsStableSortGivesTheSameBins) {
+  std::vector<Vec3> pos = random_cloud(3000, 5);
+  for (std::size_t i = 0; i < pos.size(); i += 3) pos[i].z = 40.0;  // a third at one depth
+  const r1::Epoch e = make_epoch(pos, 8, r1::Shape::kSphere);  // 2 to 6 pixels: T3
+  const Scene s = make_scene(e);
+  View v;
+  v.width = 320, v.height = 200;
+  v.camera.position = {0, 0, 2600};
+  v.camera.orientation = *look_at(v.camera.position, {0, 0, 0}, {0, 1, 0});
+  const CameraFrame f = camera_frame(v);
+  const CullResult culled = cull_frame(s, v, f);
+  int calls = 0;
+  const SplatSortPass stable = [&calls](std::span<const double> depth, std::vector<std::uint32_t>& order) {
+    ++calls;
+    order.resize(depth.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&depth](std::uint32_t a, std::uint32_t b) { return depth[a] < depth[b]; });
+    return r1::Status::ok();
+  };
+  auto want = bin_splats(s, v, f, culled);
+  auto got = bin_splats(s, v, f, culled, stable);
+  ASSERT_TRUE(want.is_ok() && got.is_ok());
+  ASSERT_GT(want->splats.size(), 100u);
+  std::size_t ties = 0;
+  for (std::size_t i = 1; i < want->splats.size(); ++i) ties += want->splats[i].depth == want->splats[i - 1].depth;
+  EXPECT_GT(ties, 10u);
+  EXPECT_EQ(calls, 1);
+  ASSERT_EQ(got->splats.size(), want->splats.size());
+  for (std::size_t i = 0; i < want->splats.size(); ++i) ASSERT_EQ(got->splats[i].particle, want->splats[i].particle) << i;
+  EXPECT_EQ(got->tiles, want->tiles);
+  const SplatSortPass broken = [](std::span<const double> depth, std::vector<std::uint32_t>& order) {
+    order.assign(depth.size(), 0u);
+    return r1::Status::ok();
+  };
+  auto bad = bin_splats(s, v, f, culled, broken);
+  ASSERT_FALSE(bad.is_ok());
+  EXPECT_EQ(bad.status().message(), "splat sort: the backend's order is not a permutation of the splats");
 }
 
 }  // namespace

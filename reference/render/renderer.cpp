@@ -425,7 +425,8 @@ void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullR
 
 }  // namespace
 
-SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled) {
+Result<SplatBins> bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled,
+                             const SplatSortPass& sort) {
   // Every visible T3 particle, and the handoff band's share of T-inf ones (R1-RND-045).
   const std::vector<Vec3> grad = v.splat_stretch > 0 ? u5_gradients(s) : std::vector<Vec3>{};
   SplatBins b;
@@ -435,9 +436,30 @@ SplatBins bin_splats(const Scene& s, const View& v, const CameraFrame& f, const 
     Splat sp;
     if (weight > 0 && make_splat(s, v, f, vis.particle, weight, grad, sp)) b.splats.push_back(sp);
   }
-  // Front to back by depth, ties by particle index (R1-RND-043), binned into tiles.
-  std::sort(b.splats.begin(), b.splats.end(),
-            [](const Splat& a, const Splat& c) { return a.depth != c.depth ? a.depth < c.depth : a.particle < c.particle; });
+  // Front to back by depth, ties by particle index (R1-RND-043), binned into tiles. The splats
+  // come in ascending particle order, so a backend's stable sort by depth gives the same order.
+  const bool positive = std::all_of(b.splats.begin(), b.splats.end(),
+                                    [](const Splat& sp) { return sp.depth > 0 && std::isfinite(sp.depth); });
+  if (sort && positive) {
+    std::vector<double> depth(b.splats.size());
+    for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = b.splats[i].depth;
+    std::vector<std::uint32_t> order;
+    R1_TRY(sort(depth, order));
+    std::vector<char> seen(depth.size(), 0);
+    bool permutation = order.size() == depth.size();
+    for (std::size_t i = 0; permutation && i < order.size(); ++i) {
+      permutation = order[i] < depth.size() && seen[order[i]] == 0;
+      if (permutation) seen[order[i]] = 1;
+    }
+    if (!permutation) return Status::internal("splat sort: the backend's order is not a permutation of the splats");
+    std::vector<Splat> sorted;
+    sorted.reserve(order.size());
+    for (const std::uint32_t i : order) sorted.push_back(b.splats[i]);
+    b.splats = std::move(sorted);
+  } else {
+    std::sort(b.splats.begin(), b.splats.end(),
+              [](const Splat& a, const Splat& c) { return a.depth != c.depth ? a.depth < c.depth : a.particle < c.particle; });
+  }
   b.tiles_x = (v.width + kTile - 1) / kTile, b.tiles_y = (v.height + kTile - 1) / kTile;
   b.tiles.resize(static_cast<std::size_t>(b.tiles_x) * b.tiles_y);
   for (std::uint32_t i = 0; i < b.splats.size(); ++i) {
@@ -601,7 +623,7 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   st.edge_s = seconds_since(t0);
 
   t0 = clock::now();
-  const SplatBins bins = bin_splats(s, v, f, culled);
+  R1_ASSIGN(const SplatBins bins, bin_splats(s, v, f, culled, passes.splat_sort));
   st.splats = bins.splats.size();
   st.splat_s = seconds_since(t0);
 

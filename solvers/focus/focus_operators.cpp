@@ -342,6 +342,7 @@ Status OperatorsQ32::use_products(const ExactProductFactory& factory) {
   }
   R1_ASSIGN(std::unique_ptr<ExactProduct> c, factory(cptr, ccol, cval, false));
   R1_ASSIGN(std::unique_ptr<ExactProduct> in, factory(pattern_.in_ptr, pattern_.in_src, in_p_, false));
+  if (w == nullptr || c == nullptr || in == nullptr) return Status::ok();  // declined: the row loops
   dev_walk_ = std::move(w);
   dev_chebyshev_ = std::move(c);
   dev_in_ = std::move(in);

@@ -815,6 +815,25 @@ RC_GTEST_PROP(FocusProducts, ABackendsExactProductGivesTheRowLoopsBits, ()) {
   RC_ASSERT(*ha == *hb);
 }
 
+TEST(FocusProducts, ADeclinedMatrixKeepsTheRowLoops) {
+  const Graph g = generated(r1::GenKind::kBa, 300, 3);
+  int applications = 0;
+  const r1::ExactProductFactory plain = plain_products(&applications);
+  r1::FocusOptions on;
+  // Declines the Chebyshev step's matrix (the only one with 2n columns): no product runs.
+  on.products = [&](std::span<const std::uint64_t> ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
+                    bool identity) -> r1::Result<std::unique_ptr<r1::ExactProduct>> {
+    if (col.size() == g.col.size() + g.n) return std::unique_ptr<r1::ExactProduct>();
+    return plain(ptr, col, val, identity);
+  };
+  const auto a = r1::compute_focus_q32(g, TriKernelParams{}, 0.3);
+  const auto b = r1::compute_focus_q32(g, TriKernelParams{}, 0.3, {}, on);
+  ASSERT_TRUE(a.is_ok() && b.is_ok());
+  EXPECT_EQ(a->phi, b->phi);
+  EXPECT_EQ(a->heat, b->heat);
+  EXPECT_EQ(applications, 0);
+}
+
 TEST(FocusProducts, AFailingProductIsTheStagesInternalError) {
   const Graph g = generated(r1::GenKind::kBa, 300, 3);
   int applications = 0;

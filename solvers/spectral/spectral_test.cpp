@@ -300,6 +300,14 @@ TEST(Spectral, ABackendsRowsGiveTheHostsBits) {
     EXPECT_EQ(got->matvecs, want->matvecs);
     EXPECT_GT(calls, 0) << g.n;
   }
+  // A backend that declines (no rows): the host's rows, the same bits.
+  const r1::Graph g = generated(r1::GenKind::kBa, 600);
+  r1::SpectralOptions declined;
+  declined.q32_rows = [](const r1::SpectralOperator<r1::fx::Q32>&) -> std::unique_ptr<r1::spectral::BlockRows> { return nullptr; };
+  auto want = r1::spectral_embedding_q32(g, defaults());
+  auto got = r1::spectral_embedding_q32(g, defaults(), {}, declined);
+  ASSERT_TRUE(want.is_ok() && got.is_ok());
+  EXPECT_EQ(spectrum_digest(*got), spectrum_digest(*want));
 }
 
 TEST(Spectral, MatrixMarketExportIsTheOperator) {

@@ -18,7 +18,8 @@ namespace r1 {
 // A backend's exact Q32 sparse product (R1-FOC-092): over a CSR matrix of raws fixed when it is
 // made, apply(x) returns y_i = RNE(sum_k val_k x_(col_k) / 2^32) for every row, an exact sum
 // rounded once, ties to even (an empty row: x_i when `empty_rows_identity`, else 0). A row that
-// rounds outside int64 is an error, as it is on the host.
+// rounds outside int64 is an error, as it is on the host. A factory may decline a matrix (no
+// product): the solver then keeps its row loops for every product.
 class ExactProduct {
  public:
   virtual ~ExactProduct() = default;

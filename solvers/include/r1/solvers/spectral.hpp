@@ -35,7 +35,8 @@ class BlockRows {
 
 template <class Scalar>
 struct SpectralOperator;
-// Makes a backend's rows for an operator (which outlives them).
+// Makes a backend's rows for an operator (which outlives them), or none to decline it (the host's
+// rows then run it).
 using Q32RowsFactory = std::function<std::unique_ptr<spectral::BlockRows>(const SpectralOperator<fx::Q32>& op)>;
 
 // The Q32 kernels for a panel of n rows under the scaled inner product 2^-e with frac fraction

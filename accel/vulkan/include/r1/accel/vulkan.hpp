@@ -153,6 +153,31 @@ class ExactSpmv {
   std::uint32_t pipeline_ = 0, row_ptr_ = 0, col_ = 0, val_ = 0, x_ = 0, y_ = 0, flag_ = 0;
 };
 
+// The splats' depth sort (R1-BKD-072, R1-RND-079): a stable least-significant-digit radix sort of
+// 64-bit keys, eight bits a pass, on the device. order(depth) returns the permutation that puts
+// positive finite depths in ascending order, equal depths in index order (their bit patterns
+// order as the values do). Passes over a byte every key shares are skipped (a stable pass over a
+// constant digit moves nothing). More than kMaxKeys depths: an input error.
+class DepthSort {
+ public:
+  // Keys one call sorts at most (2^23): no shader loop then passes lavapipe's 65535 iterations.
+  static constexpr std::size_t kMaxKeys = std::size_t{1} << 23;
+  static Result<DepthSort> build(Context& ctx);
+  Result<std::vector<std::uint32_t>> order(std::span<const double> depth);
+
+  DepthSort() = default;
+  DepthSort(DepthSort&& o) noexcept { *this = std::move(o); }
+  DepthSort& operator=(DepthSort&& o) noexcept;
+  DepthSort(const DepthSort&) = delete;
+  DepthSort& operator=(const DepthSort&) = delete;
+  ~DepthSort();
+
+ private:
+  Context* ctx_ = nullptr;
+  std::uint32_t histogram_ = 0, scan_digits_ = 0, scan_bases_ = 0, scatter_ = 0;
+  std::array<std::uint32_t, 6> buffers_{};  // keys and indices (two of each), the counts, the digit totals
+};
+
 // The pinhole camera of a frame as the impostor pass needs it (render::CameraFrame and the image
 // size): the ray through pixel centre (x + 0.5, y + 0.5) has direction
 // normalize(forward + right sx + up sy), sx = (x + 0.5 - width / 2) / focal_px,
