@@ -13,6 +13,7 @@
 #include <numeric>
 #include <random>
 
+#include "device_test_support.hpp"
 #include "r1/accel/vulkan.hpp"
 
 namespace r1::vk {
@@ -26,12 +27,8 @@ std::vector<std::uint32_t> stable_order(const std::vector<double>& d) {
 }
 
 TEST(VulkanDepthSort, TheDevicesOrderIsTheStableSortOfTheDepths) {
-  auto ctx = Context::create();
-  if (!ctx.is_ok()) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << ctx.status().message();
-    GTEST_SKIP() << ctx.status().message();
-  }
-  auto sort = DepthSort::build(**ctx);
+  R1_NEED_DEVICE(ctx);
+  auto sort = DepthSort::build(*ctx);
   ASSERT_TRUE(sort.is_ok()) << sort.status().message();
   std::mt19937_64 rng(7);
   for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{255}, std::size_t{256},

@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "device_test_support.hpp"
 #include "r1/accel/vulkan.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/q32.hpp"
@@ -15,13 +16,6 @@
 namespace {
 
 using r1::i128;
-
-std::unique_ptr<r1::vk::Context> context_or_skip(std::string& reason) {
-  auto ctx = r1::vk::Context::create();
-  if (ctx.is_ok()) return std::move(ctx).value();
-  reason = ctx.status().message();
-  return nullptr;
-}
 
 struct Csr {
   std::vector<std::uint64_t> row_ptr{0};
@@ -59,12 +53,7 @@ std::int64_t draw(std::uint64_t counter, std::uint64_t dim, int bits) {
 }
 
 TEST(VulkanExactSpmv, RowSumsRoundLikeTheHostsI128BitForBit) {
-  std::string reason;
-  auto ctx = context_or_skip(reason);
-  if (!ctx) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(ctx);
   RecordProperty("device", ctx->info().name);
   const std::uint32_t n = 2000;
   Csr a;
@@ -117,12 +106,7 @@ TEST(VulkanExactSpmv, RowSumsRoundLikeTheHostsI128BitForBit) {
 }
 
 TEST(VulkanExactSpmv, OverflowAndBadInputAreErrors) {
-  std::string reason;
-  auto ctx = context_or_skip(reason);
-  if (!ctx) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(ctx);
   Csr a;
   a.row({{0, 1}});
   a.row({{0, std::int64_t{1} << 62}, {1, std::int64_t{1} << 62}});  // 2^125 / 2^32 leaves int64

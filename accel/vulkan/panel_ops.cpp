@@ -68,23 +68,13 @@ void main() {
     mul128(coef[t * p.no + o], data[i * p.k + t], ph, pl);
     add128(s, ph, pl);
   }
-  uint64_t q0 = (s[0] >> 60) | (s[1] << 4), q1 = (s[1] >> 60) | (s[2] << 4);
-  uint64_t q2 = uint64_t(int64_t(s[2]) >> 60);
-  uint64_t rem = s[0] & 0x0ffffffffffffffful, tie = 0x0800000000000000ul;
-  if (rem > tie || (rem == tie && (q0 & 1ul) != 0ul)) {
-    q0 += 1ul;
-    if (q0 == 0ul) {
-      q1 += 1ul;
-      if (q1 == 0ul) q2 += 1ul;
-    }
-  }
-  uint64_t ext = uint64_t(int64_t(q0) >> 63);
-  if (q1 != ext || q2 != ext) {
+  int64_t r;
+  if (!round192(s, 60u, r)) {
     atomicMin(first_overflow, p.row0 + i);
     result[g] = 0l;
     return;
   }
-  result[g] = int64_t(q0);
+  result[g] = r;
 }
 )";
 

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <numeric>
 
+#include "device_test_support.hpp"
 #include "panel_cases.hpp"
 
 namespace r1::vk {
@@ -18,21 +19,6 @@ namespace {
 
 using spectral::Panel;
 using spectral::PanelOps;
-
-std::shared_ptr<Context> context_or_skip(std::string& reason) {
-  auto ctx = Context::create();
-  if (ctx.is_ok()) return std::shared_ptr<Context>(std::move(ctx).value());
-  reason = ctx.status().message();
-  return nullptr;
-}
-
-#define R1_NEED_DEVICE(ctx)                                                                                     \
-  std::string reason;                                                                                           \
-  auto ctx = context_or_skip(reason);                                                                           \
-  if (!ctx) {                                                                                                   \
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason; \
-    GTEST_SKIP() << reason;                                                                                     \
-  }
 
 Panel<fx::Q32> make_panel(std::size_t n, const std::vector<int>& bits, std::uint64_t seed) { return test::random_panel(n, bits, seed); }
 

@@ -24,7 +24,8 @@ inline std::array<std::uint32_t, 3> groups_for(std::uint64_t count) {
 
 // Exact integer arithmetic for 64-invocation compute shaders (after #version and the int64
 // extension): magnitude, the signed 64 x 64 -> 128-bit product in (hi, lo), a signed 128-bit
-// term added to a 192-bit two's complement sum, and the invocation's element index.
+// term added to a 192-bit two's complement sum, its rounding by a power of two, and the
+// invocation's element index.
 inline constexpr const char* kWideInt = R"(
 layout(local_size_x = 64) in;
 
@@ -55,6 +56,24 @@ void add128(inout uint64_t s[3], uint64_t hi, uint64_t lo) {
   s[0] = a;
   s[1] = b2;
   s[2] += c1 + (int64_t(hi) < 0l ? ~0ul : 0ul);
+}
+
+// r = the 192-bit s / 2^shift (0 < shift < 64) rounded half to even, as fx::detail::rne_shift
+// rounds; false when that leaves int64.
+bool round192(uint64_t s[3], uint shift, out int64_t r) {
+  uint64_t q0 = (s[0] >> shift) | (s[1] << (64u - shift)), q1 = (s[1] >> shift) | (s[2] << (64u - shift));
+  uint64_t q2 = uint64_t(int64_t(s[2]) >> shift);
+  uint64_t rem = s[0] & ((1ul << shift) - 1ul), tie = 1ul << (shift - 1u);
+  if (rem > tie || (rem == tie && (q0 & 1ul) != 0ul)) {
+    q0 += 1ul;
+    if (q0 == 0ul) {
+      q1 += 1ul;
+      if (q1 == 0ul) q2 += 1ul;
+    }
+  }
+  uint64_t ext = uint64_t(int64_t(q0) >> 63);
+  r = int64_t(q0);
+  return q1 == ext && q2 == ext;
 }
 
 uint invocation() { return gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u; }

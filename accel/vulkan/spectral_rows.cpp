@@ -49,23 +49,13 @@ void main() {
     mul128(-g[i], coef[a], ph, pl);
     add128(s, ph, pl);
   }
-  uint64_t q0 = (s[0] >> 32) | (s[1] << 32), q1 = (s[1] >> 32) | (s[2] << 32);
-  uint64_t q2 = uint64_t(int64_t(s[2]) >> 32);
-  uint64_t rem = s[0] & 0xfffffffful;
-  if (rem > 0x80000000ul || (rem == 0x80000000ul && (q0 & 1ul) != 0ul)) {
-    q0 += 1ul;
-    if (q0 == 0ul) {
-      q1 += 1ul;
-      if (q1 == 0ul) q2 += 1ul;
-    }
-  }
-  uint64_t ext = uint64_t(int64_t(q0) >> 63);
-  if (q1 != ext || q2 != ext) {
+  int64_t r;
+  if (!round192(s, 32u, r)) {
     atomicMin(first_overflow, i);
     y[v] = 0l;
     return;
   }
-  y[v] = int64_t(q0);
+  y[v] = r;
 }
 )";
 

@@ -11,18 +11,12 @@
 #include <cstdlib>
 #include <random>
 
+#include "device_test_support.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 
 namespace r1::vk {
 namespace {
-
-std::shared_ptr<Context> context_or_skip(std::string& reason) {
-  auto ctx = Context::create();
-  if (ctx.is_ok()) return std::shared_ptr<Context>(std::move(ctx).value());
-  reason = ctx.status().message();
-  return nullptr;
-}
 
 Graph graph_of(GenKind kind, std::int64_t n) {
   GenParams p;
@@ -48,12 +42,7 @@ std::vector<fx::Q32> block(std::size_t n, std::size_t count, int bits, std::uint
 }
 
 TEST(VulkanSpectralRows, TheDevicesRowsAreTheHostsBitForBit) {
-  std::string reason;
-  auto ctx = context_or_skip(reason);
-  if (!ctx) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(ctx);
   auto factory = rows_factory(ctx);
   ASSERT_TRUE(factory.is_ok()) << factory.status().message();
   for (const auto& [kind, size] : {std::pair{GenKind::kBa, std::int64_t{700}}, std::pair{GenKind::kRmat, std::int64_t{512}}}) {
