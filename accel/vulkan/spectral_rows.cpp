@@ -16,10 +16,8 @@ namespace r1::vk {
 namespace {
 
 constexpr const char* kVersion = "#version 460\n#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require\n";
-// One invocation per (row, column) of the block: its loop runs over the row's stored entries.
-// llvmpipe (lavapipe) stops a loop nest after 65535 iterations, so an operator with a longer row
-// is declined (the host's rows run it).
-constexpr std::uint64_t kLongestRow = 65000;
+// One invocation per (row, column) of the block: its loop runs over the row's stored entries, so
+// an operator with a row longer than kLongestRow is declined (the host's rows run it, R1-BKD-073).
 
 constexpr const char* kRows = R"(
 layout(std430, binding = 0) readonly buffer R { uint64_t row_ptr[]; };
@@ -89,14 +87,19 @@ class VulkanRows final : public spectral::BlockRows {
     for (std::size_t k = 0; k < m.size(); ++k) m[k] = op.m[k].raw;
     for (std::size_t k = 0; k < gv.size(); ++k) gv[k] = op.g[k].raw;
     has_g_ = !gv.empty();
-    buffers_[0] = uploaded(ctx, std::span<const std::uint64_t>(g.row_ptr));
-    buffers_[1] = uploaded(ctx, std::span<const std::uint32_t>(g.col));
-    buffers_[2] = uploaded(ctx, std::span<const std::int64_t>(m));
-    buffers_[3] = uploaded(ctx, std::span<const std::int64_t>(gv));
+    try {
+      buffers_[0] = uploaded(ctx, std::span<const std::uint64_t>(g.row_ptr));
+      buffers_[1] = uploaded(ctx, std::span<const std::uint32_t>(g.col));
+      buffers_[2] = uploaded(ctx, std::span<const std::int64_t>(m));
+      buffers_[3] = uploaded(ctx, std::span<const std::int64_t>(gv));
+    } catch (...) {
+      release();  // no destructor runs for a constructor that throws
+      throw;
+    }
   }
   ~VulkanRows() override {
     std::lock_guard<std::mutex> guard(s_->lock);
-    for (const std::uint32_t id : buffers_) s_->ctx->buffer_release(id);  // 0 (never made): a no-op
+    release();
   }
   VulkanRows(const VulkanRows&) = delete;
   VulkanRows& operator=(const VulkanRows&) = delete;
@@ -141,6 +144,9 @@ class VulkanRows final : public spectral::BlockRows {
   }
 
  private:
+  void release() {
+    for (const std::uint32_t id : buffers_) s_->ctx->buffer_release(id);  // 0 (never made): a no-op
+  }
   std::shared_ptr<Shared> s_;
   std::uint32_t rows_ = 0;
   bool has_g_ = false;
@@ -155,9 +161,7 @@ Result<Q32RowsFactory> rows_factory(std::shared_ptr<Context> ctx) {
   shared->ctx = std::move(ctx);
   R1_ASSIGN(shared->pipeline, shared->ctx->compute_compile(std::string(kVersion) + detail::kWideInt + kRows, "spectral_rows"));
   return Q32RowsFactory([shared](const SpectralOperator<fx::Q32>& op) -> std::unique_ptr<spectral::BlockRows> {
-    const Graph& g = *op.graph;
-    for (std::uint32_t i = 0; i < op.n; ++i)
-      if (g.row_ptr[i + 1] - g.row_ptr[i] > kLongestRow) return nullptr;  // declined: the host's rows
+    if (!rows_fit_the_loop_limit(op.graph->row_ptr)) return nullptr;  // declined: the host's rows
     return std::make_unique<VulkanRows>(shared, op);
   });
 }

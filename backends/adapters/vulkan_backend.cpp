@@ -3,8 +3,8 @@
 // and the spectral solver's exact kernels; cull, edges, splat binning, labels and the other epoch
 // work on the host (the reference's passes, the cpu backend's stages). Its epochs are the
 // reference's bytes. Its 13.1 device is the Vulkan device on the same context.
-#include <cstdlib>
 #include <algorithm>
+#include <cstdlib>
 #include <memory>
 #include <numeric>
 #include <stdexcept>
@@ -46,15 +46,11 @@ bool on_device_unless(const char* var) {
   return m == "device";
 }
 
-// A row longer than this is declined (the focus keeps its row loops): the kernel loops over a
-// row's entries, and llvmpipe (lavapipe) stops a loop nest after 65535 iterations.
-constexpr std::uint64_t kLongestRow = 65000;
-
 ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
   return [ctx](std::span<const std::uint64_t> ptr, std::span<const std::uint32_t> col, std::span<const std::int64_t> val,
                bool identity) -> Result<std::unique_ptr<ExactProduct>> {
-    for (std::size_t i = 0; i + 1 < ptr.size(); ++i)
-      if (ptr[i + 1] - ptr[i] > kLongestRow) return std::unique_ptr<ExactProduct>();
+    // A row too long for lavapipe's loops: declined, the focus keeps its row loops (R1-BKD-073).
+    if (!vk::rows_fit_the_loop_limit(ptr)) return std::unique_ptr<ExactProduct>();
     R1_ASSIGN(vk::ExactSpmv spmv, vk::ExactSpmv::build(*ctx, ptr, col, val, identity));
     return std::unique_ptr<ExactProduct>(std::make_unique<DeviceProduct>(ctx, std::move(spmv)));
   };

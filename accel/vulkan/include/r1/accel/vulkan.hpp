@@ -124,6 +124,17 @@ class CliffordKernels {
   std::uint32_t constants_ = 0, roll_ = 0, shifted_ = 0, linear_ = 0, residual_ = 0;
 };
 
+// llvmpipe (lavapipe) stops an invocation's loop nest after 65,535 iterations, and its results
+// are then silently wrong (R1-BKD-073). Kernels that loop over a matrix row take rows of at most
+// kLongestRow entries; a matrix with a longer row is left to the host, on every device, so the
+// bits never depend on the device.
+inline constexpr std::uint64_t kLongestRow = 65000;
+inline bool rows_fit_the_loop_limit(std::span<const std::uint64_t> row_ptr) {
+  for (std::size_t i = 0; i + 1 < row_ptr.size(); ++i)
+    if (row_ptr[i + 1] - row_ptr[i] > kLongestRow) return false;
+  return true;
+}
+
 // The exact Q32 sparse product (R1-BKD-064): y_i = RNE(sum_k val_k x_(col_k) / 2^32), the row sum
 // exact in 128 bits (two 64-bit limbs in the shader) and rounded once, ties to even, as the host's
 // i128 arithmetic and fx::detail::rne_shift give it: the walk and operator products of the focus
