@@ -15,11 +15,13 @@
 #include <cstdlib>
 #include <random>
 
+#include "adapters/vulkan_passes.hpp"
 #include "r1/accel/vulkan.hpp"
 #include "r1/backends/registry.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "render/cull.hpp"
 #include "render/passes.hpp"
 #include "render/scene.hpp"
 #include "render/view.hpp"
@@ -182,6 +184,119 @@ INSTANTIATE_TEST_SUITE_P(Modes, FramePasses, testing::Values(vk::ImpostorPass::M
                          [](const testing::TestParamInfo<vk::ImpostorPass::Mode>& p) {
                            return p.param == vk::ImpostorPass::Mode::kCompute ? std::string("compute") : std::string("raster");
                          });
+
+// The cull on the device (R1-BKD-074, R1-RND-074) against the reference's cull_frame on the same
+// scene and view: the visible list with every depth and size the same bits (lavapipe; a GPU's fp64
+// division need not round correctly, so there sizes within 1e-12 relative and tiers equal but for
+// sizes at a tier boundary), the far nodes in walk order, the walk's counts; and the indirect-draw
+// records and tier lists the pass leaves on the device. Views from inside the graph (spheres
+// reaching the near plane), close, framed, far (far nodes) and looking away (everything culled).
+TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
+  std::string reason;
+  auto ctx = context_or_skip(reason);
+  if (!ctx) {
+    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
+    GTEST_SKIP() << reason;
+  }
+  auto pass = vk::CullPass::build(*ctx);
+  ASSERT_TRUE(pass.is_ok()) << pass.status().message();
+  const bool cpu = ctx->info().cpu;
+  GenParams gp;
+  gp.kind = GenKind::kBa;
+  gp.n = 1500;
+  auto snap = generate(gp);
+  ASSERT_TRUE(snap.is_ok());
+  auto graph = build_graph(*snap);
+  ASSERT_TRUE(graph.is_ok());
+  auto epoch = run_epoch(*snap, *graph, {});
+  ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
+  const render::Scene scene = render::make_scene(*epoch);
+  const double fit = render::fit_distance(scene, 60);
+  std::vector<render::View> views;
+  for (const double share : {0.02, 0.3, 1.0, 8.0, 60.0}) {
+    render::View base;
+    base.width = 160, base.height = 90;
+    const auto orbit = render::orbit_views(base, scene.centroid, fit * share, 3);
+    views.insert(views.end(), orbit.begin(), orbit.end());
+  }
+  render::View away;
+  away.width = 64, away.height = 64;
+  away.camera.position = scene.centroid + render::Vec3{0, 0, 3 * fit};
+  away.camera.orientation = *render::look_at(away.camera.position, away.camera.position + render::Vec3{0, 0, 1}, {0, 1, 0});
+  views.push_back(away);
+  std::array<std::size_t, 5> tiers{};
+  std::size_t far_nodes = 0, culled = 0, near_plane = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    SCOPED_TRACE("view " + std::to_string(i));
+    const render::View& v = views[i];
+    const render::CameraFrame f = render::camera_frame(v);
+    render::CullStats want_stats, got_stats;
+    const render::CullResult want = render::cull_frame(scene, v, f, &want_stats);
+    render::CullResult got;
+    ASSERT_TRUE(backends::cull_on_device(*pass, scene, v, f, got, got_stats).is_ok());
+    ASSERT_TRUE(render::check_cull_result(scene, got).is_ok());
+    ASSERT_EQ(got.visible.size(), want.visible.size());
+    std::size_t tier_differs = 0;
+    for (std::size_t k = 0; k < want.visible.size(); ++k) {
+      const render::Visible &a = want.visible[k], &b = got.visible[k];
+      ASSERT_EQ(a.particle, b.particle) << k;
+      if (cpu) {
+        ASSERT_EQ(std::memcmp(&a.depth, &b.depth, 8), 0) << k;
+        ASSERT_EQ(std::memcmp(&a.s, &b.s, 8), 0) << k;
+        ASSERT_EQ(a.tier, b.tier) << k;
+      } else {
+        ASSERT_NEAR(a.depth, b.depth, 1e-12 * std::fabs(a.depth)) << k;
+        ASSERT_NEAR(a.s, b.s, 1e-12 * a.s) << k;
+        tier_differs += a.tier != b.tier;
+      }
+      ++tiers[static_cast<std::size_t>(a.tier)];
+      near_plane += a.s == 1e300;
+    }
+    EXPECT_EQ(tier_differs, 0u);
+    ASSERT_EQ(got.far.size(), want.far.size());
+    for (std::size_t k = 0; k < want.far.size(); ++k) {
+      EXPECT_EQ(got.far[k].level, want.far[k].level) << k;
+      EXPECT_EQ(got.far[k].id, want.far[k].id) << k;
+    }
+    EXPECT_EQ(got.far_particles, want.far_particles);
+    EXPECT_EQ(got_stats.nodes_tested, want_stats.nodes_tested);
+    EXPECT_EQ(got_stats.nodes_culled, want_stats.nodes_culled);
+    EXPECT_EQ(got_stats.particles_tested, want_stats.particles_tested);
+    far_nodes += want.far.size(), culled += want_stats.nodes_culled;
+    // The indirect-draw records on the device: a quad per instance, each tier's visible count,
+    // the tiers' lists one after another, each the tier's particles ascending.
+    auto args = ctx->buffer_read(pass->args_buffer(), 0, 5 * sizeof(vk::DrawArgs));
+    ASSERT_TRUE(args.is_ok());
+    std::array<vk::DrawArgs, 5> rec{};
+    std::memcpy(rec.data(), args->data(), args->size());
+    std::uint32_t base = 0;
+    for (std::size_t t = 0; t < 5; ++t) {
+      std::vector<std::uint32_t> expect;
+      for (const render::Visible& vis : want.visible)
+        if (static_cast<std::size_t>(vis.tier) == t) expect.push_back(vis.particle);
+      EXPECT_EQ(rec[t].vertex_count, 6u);
+      EXPECT_EQ(rec[t].first_instance, base);
+      ASSERT_EQ(rec[t].instance_count, expect.size()) << "tier " << t;
+      if (!expect.empty()) {
+        auto list = ctx->buffer_read(pass->tier_list_buffer(), std::size_t{base} * 4, expect.size() * 4);
+        ASSERT_TRUE(list.is_ok());
+        EXPECT_EQ(std::memcmp(list->data(), expect.data(), expect.size() * 4), 0) << "tier " << t;
+      }
+      base += rec[t].instance_count;
+    }
+  }
+  // The views reach every tier, the near plane, far nodes and culled nodes.
+  for (std::size_t t = 0; t < 5; ++t) EXPECT_GT(tiers[t], 0u) << "tier " << t;
+  EXPECT_GT(near_plane, 0u);
+  EXPECT_GT(far_nodes, 0u);
+  EXPECT_GT(culled, 0u);
+  // A scene the pass is not given right is refused, not guessed at.
+  vk::CullScene bad;
+  const std::vector<double> radius(3, 1.0), position(6, 0.0);
+  const std::vector<std::uint32_t> leaf(3, 0);
+  bad.radius = radius, bad.position = position, bad.leaf = leaf;
+  EXPECT_FALSE(pass->run(bad, {}).is_ok());
+}
 
 // The field and composite pass on the device (R1-BKD-070), through the backend: frames of one
 // epoch from near (impostors, edges), middle (splats and field) and far (the field alone) against

@@ -30,6 +30,7 @@ ADAPTER_IMPLEMENTATION = {
     # the trait on accel/vulkan's context, det_exp's constants from the reference's Clifford
     "backends/adapters/vulkan_device.cpp": {"reference", "accel"},
     "backends/adapters/vulkan_adapters.hpp": {"accel"},  # the context the Vulkan device and backend share
+    "backends/adapters/vulkan_passes.hpp": {"reference", "accel"},  # the backend's frame passes its tests call
     # the vulkan backend: accel/vulkan's frame passes, the cpu backend's kernels for its epoch stages
     "backends/adapters/vulkan_backend.cpp": {"reference", "accel", "solvers"},
 }

@@ -1,8 +1,8 @@
 // The vulkan backend (spec/backends.md R1-BKD-065..070): on accel/vulkan's context the frame's
-// T1/T2 impostor pass (a graphics pipeline, or a compute shader) and its field and composite pass,
-// and the spectral solver's exact kernels; cull, edges, splat binning, labels and the other epoch
-// work on the host (the reference's passes, the cpu backend's stages). Its epochs are the
-// reference's bytes. Its 13.1 device is the Vulkan device on the same context.
+// cull, its T1/T2 impostor pass (a graphics pipeline, or a compute shader), the splats' depth sort
+// and its field and composite pass, and the spectral solver's and the focus's exact kernels;
+// edges, splat binning, labels and the other epoch work on the host (the reference's passes, the
+// cpu backend's stages). Its epochs are the reference's bytes. Its 13.1 device is the Vulkan device on the same context.
 #include <algorithm>
 #include <cstdlib>
 #include <memory>
@@ -14,6 +14,7 @@
 #include "stage_backend.hpp"
 #include "r1/accel/vulkan_panel.hpp"
 #include "vulkan_adapters.hpp"
+#include "vulkan_passes.hpp"
 #if R1_BACKEND_CPU
 #include "r1/accel/cpu/panel_kernels.hpp"
 #endif
@@ -58,6 +59,7 @@ ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
 
 struct PassState {
   std::shared_ptr<vk::Context> ctx;
+  vk::CullPass cull;
   vk::DepthSort splat_sort;
   vk::ImpostorPass impostors;
   vk::CompositePass composite;
@@ -82,6 +84,79 @@ Status draw_on_device(PassState& st, std::span<const render::Impostor> list, con
   }
   return st.impostors.draw(cam, items, layer.t, layer.color, layer.owner);
 }
+
+}  // namespace
+
+Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::View& v, const render::CameraFrame& f,
+                      render::CullResult& out, render::CullStats& stats) {
+  // The scene flattened: node boxes with their largest member radius, parents from the children
+  // lists (the walk's own links), positions, radii and each particle's level-0 node.
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  std::array<std::vector<double>, kLevels> node;
+  std::array<std::vector<std::uint32_t>, kLevels> parent;
+  vk::CullScene scene;
+  for (int l = 0; l < kLevels; ++l) {
+    const auto L = static_cast<std::size_t>(l);
+    for (const render::NodeData& d : s.nodes[L]) {
+      const double row[8] = {d.lo.x, d.lo.y, d.lo.z, d.hi.x, d.hi.y, d.hi.z, d.max_radius, 0.0};
+      node[L].insert(node[L].end(), row, row + 8);
+    }
+    if (l > 0) {
+      parent[L - 1].assign(s.nodes[L - 1].size(), kNone);
+      for (std::uint32_t id = 0; id < s.nodes[L].size(); ++id)
+        for (const std::uint32_t c : s.hierarchy->levels[L][id].children) parent[L - 1][c] = id;
+    }
+  }
+  std::vector<double> position(std::size_t{s.n} * 3);
+  std::vector<std::uint32_t> leaf(s.n, kNone);
+  for (std::uint32_t p = 0; p < s.n; ++p)
+    position[std::size_t{p} * 3] = s.position[p].x, position[std::size_t{p} * 3 + 1] = s.position[p].y,
+                            position[std::size_t{p} * 3 + 2] = s.position[p].z;
+  for (std::uint32_t id = 0; id < s.nodes[0].size(); ++id)
+    for (const std::uint32_t p : s.hierarchy->levels[0][id].children) leaf[p] = id;
+  for (std::size_t l = 0; l < kLevels; ++l) scene.node[l] = node[l], scene.parent[l] = parent[l];
+  scene.position = position, scene.radius = s.radius, scene.leaf = leaf;
+  const render::Frustum fr = render::make_frustum(v, f);
+  vk::CullView view;
+  view.normal = fr.normal, view.offset = fr.offset;
+  view.position = v.camera.position, view.forward = f.forward;
+  view.focal_px = f.focal_px, view.near = render::kNear;
+  view.t0 = v.tiers.t0, view.t1 = v.tiers.t1, view.t2 = v.tiers.t2, view.t3 = v.tiers.t3, view.band = v.tiers.band;
+  R1_ASSIGN(const vk::CullOutput got, pass.run(scene, view));
+  out = {};
+  out.visible.resize(got.particle.size());
+  for (std::size_t i = 0; i < got.particle.size(); ++i)
+    out.visible[i] = {got.particle[i], got.depth[i], got.size[i], static_cast<render::Tier>(got.tier[i])};
+  // The far nodes in the reference's walk order and its counts, from the device's decisions: the
+  // walk without its tests, visiting exactly the nodes the device tested.
+  stats = {};
+  std::vector<std::pair<int, std::uint32_t>> stack;
+  for (std::uint32_t id = static_cast<std::uint32_t>(s.nodes[kLevels - 1].size()); id-- > 0;) stack.push_back({kLevels - 1, id});
+  while (!stack.empty()) {
+    const auto [l, id] = stack.back();
+    stack.pop_back();
+    const auto L = static_cast<std::size_t>(l);
+    ++stats.nodes_tested;
+    const std::uint8_t state = got.state[L][id];
+    const auto& children = s.hierarchy->levels[L][id].children;
+    if (state == vk::CullOutput::kCulled) {
+      ++stats.nodes_culled;
+    } else if (state == vk::CullOutput::kFar) {
+      out.far.push_back({l, id});
+      out.far_particles += s.nodes[L][id].count;
+    } else if (state != vk::CullOutput::kOpen) {
+      return Status::internal("vulkan cull: node " + std::to_string(id) + " of level " + std::to_string(l) +
+                              " is on the walk but the device did not test it");
+    } else if (l == 0) {
+      stats.particles_tested += children.size();
+    } else {
+      for (std::size_t c = children.size(); c-- > 0;) stack.push_back({l - 1, children[c]});
+    }
+  }
+  return Status::ok();
+}
+
+namespace {
 
 // The frame's field flattened for the device: every node's field aggregates (FieldFrame::node),
 // the children tables, and per level-0 node the members with field weight (add_members' list).
@@ -229,6 +304,11 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   auto composite = vk::CompositePass::build(*state->ctx, reference_exp_constants(), max_candidates);
   if (!composite.is_ok()) throw std::invalid_argument(composite.status().message());
   state->composite = std::move(composite).value();
+  // The cull (R1-BKD-074) unless $R1_VULKAN_CULL=host; beyond the device's particles, the host's.
+  const bool cull_on_the_device = on_device_unless("R1_VULKAN_CULL");
+  auto cull = vk::CullPass::build(*state->ctx);
+  if (!cull.is_ok()) throw std::invalid_argument(cull.status().message());
+  state->cull = std::move(cull).value();
   // The splats' depth sort (R1-BKD-072, R1-RND-079); beyond the device sort's keys, the host's.
   auto sort = vk::DepthSort::build(*state->ctx);
   if (!sort.is_ok()) throw std::invalid_argument(sort.status().message());
@@ -237,6 +317,17 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   if (!device.is_ok()) throw std::invalid_argument(device.status().message());
   const std::string name = (*device)->describe();
   render::FramePasses passes;
+  if (cull_on_the_device)
+    passes.cull = [state](const render::Scene& s, const render::View& v, const render::CameraFrame& f, render::CullResult& out,
+                          render::CullStats& stats) -> Status {
+      std::size_t nodes = 0;
+      for (const auto& level : s.nodes) nodes += level.size();
+      if (!state->cull.fits(s.n, nodes)) {
+        out = render::cull_frame(s, v, f, &stats);
+        return Status::ok();
+      }
+      return cull_on_device(state->cull, s, v, f, out, stats);
+    };
   passes.impostors = [state](std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
                              render::OpaqueLayer& layer) { return draw_on_device(*state, list, v, f, layer); };
   passes.composite = [state](const render::CompositeInput& in, render::Image& image, render::FrameStats& st) {
@@ -294,8 +385,10 @@ std::unique_ptr<Backend> make_vulkan_backend() {
                                                      : "a compute shader over 16-pixel tiles") +
           " ray-casting in fp64 with the reference's intersections; the T-infinity field and composite a compute shader "
           "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes, and frames drawn with the neural "
-          "field, on the host); the splats' depth sort a radix sort on the device; cull, edges, splat "
-          "binning and labels the reference's on the host; " + epoch + " (the reference's bytes)",
+          "field, on the host); the cull a compute pass over the hierarchy"
+          + std::string(cull_on_the_device ? "" : " (off: R1_VULKAN_CULL=host)") +
+          "; the splats' depth sort a radix sort on the device; edges, splat binning and labels the reference's on "
+          "the host; " + epoch + " (the reference's bytes)",
       std::move(stages), Domain::kFixedQ32, std::move(passes), std::move(device).value());
 }
 

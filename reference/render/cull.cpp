@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace r1::render {
 
@@ -152,6 +153,28 @@ CullResult cull_frame(const Scene& s, const View& v, const CameraFrame& f, CullS
   std::sort(out.begin(), out.end(), [](const Visible& a, const Visible& b) { return a.particle < b.particle; });
   if (stats) *stats = local;
   return result;
+}
+
+Status check_cull_result(const Scene& s, const CullResult& r) {
+  for (std::size_t i = 0; i < r.visible.size(); ++i) {
+    const Visible& vis = r.visible[i];
+    if (vis.particle >= s.n || (i > 0 && vis.particle <= r.visible[i - 1].particle))
+      return Status::internal("cull pass: visible entry " + std::to_string(i) + " (particle " + std::to_string(vis.particle) +
+                              ") is not in ascending particle order below " + std::to_string(s.n));
+    if (static_cast<int>(vis.tier) > static_cast<int>(Tier::kTinf))
+      return Status::internal("cull pass: particle " + std::to_string(vis.particle) + " has no tier");
+  }
+  std::uint64_t members = 0;
+  for (const FarNode& node : r.far) {
+    if (node.level < 0 || node.level >= kLevels || node.id >= s.nodes[static_cast<std::size_t>(node.level)].size())
+      return Status::internal("cull pass: far node " + std::to_string(node.id) + " of level " + std::to_string(node.level) +
+                              " does not exist");
+    members += s.nodes[static_cast<std::size_t>(node.level)][node.id].count;
+  }
+  if (members != r.far_particles)
+    return Status::internal("cull pass: " + std::to_string(r.far_particles) + " far particles, the far nodes hold " +
+                            std::to_string(members));
+  return Status::ok();
 }
 
 std::vector<Visible> cull(const Scene& s, const View& v, const CameraFrame& f, CullStats* stats) {

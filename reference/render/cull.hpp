@@ -7,6 +7,7 @@
 
 #include "scene.hpp"
 #include "view.hpp"
+#include "r1/spec/status.hpp"
 
 namespace r1::render {
 
@@ -80,6 +81,11 @@ struct CullResult {
 // The frame's cull (R1-RND-025): the hierarchy walk of `cull`, stopping at nodes wholly inside the
 // frustum whose class is kFar. A pure far view costs the nodes walked, not the particles.
 CullResult cull_frame(const Scene& s, const View& v, const CameraFrame& f, CullStats* stats = nullptr);
+
+// Whether a backend's cull result (R1-RND-074) has the shape of cull_frame's: visible particles
+// strictly ascending and below |P|, tiers T0..T-inf, far nodes that exist, far_particles their
+// members' count. An internal error naming the first fault otherwise.
+Status check_cull_result(const Scene& s, const CullResult& r);
 
 // Every particle whose bounding sphere is visible, in ascending particle order. The hierarchy walk
 // (R1-RND-023) tests node boxes grown by their largest member radius and skips what lies wholly

@@ -139,8 +139,15 @@ class PixelCompositor {
   std::vector<SplatHit> hits_;
 };
 
+// A backend's cull (R1-RND-074): into a fresh result and stats, what cull_frame gives (the visible
+// particles ascending with the reference's depth, size and tier bits, the far nodes in walk order,
+// their particles, and the walk's counts). The frame checks the result's shape
+// (check_cull_result) and refuses one that cannot be the reference's.
+using CullPass = std::function<Status(const Scene&, const View&, const CameraFrame&, CullResult&, CullStats&)>;
+
 // The passes a backend runs in place of the reference's; an empty member is the reference's.
 struct FramePasses {
+  CullPass cull;
   ImpostorPass impostors;
   CompositePass composite;
   SplatSortPass splat_sort;

@@ -642,4 +642,53 @@ TEST(Splat, ABackendsStableSortGivesTheSameBins) {
   EXPECT_EQ(bad.status().message(), "splat sort: the backend's order is not a permutation of the splats");
 }
 
+// R1-RND-074: a backend's cull that keeps its contract (here cull_frame itself) gives the
+// reference's frame and stats; one whose result cannot be the reference's (a list out of order,
+// a far node that does not exist, a miscounted far set) is an internal error, and a failing pass's
+// error is the frame's.
+TEST(Cull, ABackendsCullIsCheckedBeforeTheFrameUsesIt) {
+  const r1::Epoch e = make_epoch(random_cloud(600, 9), 8, r1::Shape::kSphere);
+  const Scene s = make_scene(e);
+  View v;
+  v.width = 160, v.height = 100;
+  v.camera.position = {0, 0, 900};
+  v.camera.orientation = *look_at(v.camera.position, {0, 0, 0}, {0, 1, 0});
+  const auto render_with = [&](const CullPass& cull, FrameStats* st) {
+    FramePasses passes;
+    passes.cull = cull;
+    return render_frame(s, v, {}, st, {}, passes);
+  };
+  const CullPass same = [](const Scene& sc, const View& vw, const CameraFrame& f, CullResult& out, CullStats& stats) {
+    out = cull_frame(sc, vw, f, &stats);
+    return r1::Status::ok();
+  };
+  FrameStats want_st, got_st;
+  auto want = render_frame(s, v, {}, &want_st, {}, {});
+  auto got = render_with(same, &got_st);
+  ASSERT_TRUE(want.is_ok() && got.is_ok());
+  EXPECT_EQ(got->rgba, want->rgba);
+  EXPECT_EQ(got_st.tier_count, want_st.tier_count);
+  EXPECT_EQ(got_st.nodes_tested, want_st.nodes_tested);
+  ASSERT_GT(want_st.visible, 100u);
+  const auto broken = [&](auto fault) {
+    return CullPass([fault, &same](const Scene& sc, const View& vw, const CameraFrame& f, CullResult& out, CullStats& stats) {
+      R1_TRY(same(sc, vw, f, out, stats));
+      fault(out);
+      return r1::Status::ok();
+    });
+  };
+  const auto message = [&](const CullPass& cull) {
+    auto r = render_with(cull, nullptr);
+    return r.is_ok() ? std::string("accepted") : r.status().message();
+  };
+  EXPECT_NE(message(broken([](CullResult& r) { std::swap(r.visible[3], r.visible[4]); })).find("not in ascending particle order"),
+            std::string::npos);
+  EXPECT_NE(message(broken([](CullResult& r) { r.far.push_back({2, 1u << 30}); })).find("does not exist"), std::string::npos);
+  EXPECT_NE(message(broken([](CullResult& r) { ++r.far_particles; })).find("far particles"), std::string::npos);
+  const CullPass failing = [](const Scene&, const View&, const CameraFrame&, CullResult&, CullStats&) {
+    return r1::Status::internal("device lost");
+  };
+  EXPECT_EQ(message(failing), "device lost");
+}
+
 }  // namespace

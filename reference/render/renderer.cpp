@@ -600,7 +600,13 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   // drawn by the field alone (R1-RND-025).
   auto t0 = clock::now();
   CullStats cs;
-  const CullResult culled = cull_frame(s, v, f, &cs);
+  CullResult culled;
+  if (passes.cull) {
+    R1_TRY(passes.cull(s, v, f, culled, cs));
+    R1_TRY(check_cull_result(s, culled));
+  } else {
+    culled = cull_frame(s, v, f, &cs);
+  }
   st.visible = culled.visible.size() + culled.far_particles;
   st.nodes_tested = cs.nodes_tested;
   st.culled_nodes = cs.nodes_culled;

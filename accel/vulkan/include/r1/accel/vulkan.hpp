@@ -10,6 +10,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "r1/spec/epoch.hpp"
@@ -187,6 +188,78 @@ class DepthSort {
   Context* ctx_ = nullptr;
   std::uint32_t histogram_ = 0, scan_digits_ = 0, scan_bases_ = 0, scatter_ = 0;
   std::array<std::uint32_t, 6> buffers_{};  // keys and indices (two of each), the counts, the digit totals
+};
+
+// The frame's cull on the device (R1-BKD-074; the reference's cull_frame, R1-RND-025, whose walk
+// it reproduces). The scene, flattened by the host:
+struct CullScene {
+  // Per level (0 finest .. kLevels - 1), 8 doubles a node: the box's lo and hi, the largest member
+  // radius, 0; and each node's parent (an id at the next level; not read at the top level).
+  std::array<std::span<const double>, kLevels> node;
+  std::array<std::span<const std::uint32_t>, kLevels> parent;
+  std::span<const double> position;   // 3 doubles a particle
+  std::span<const double> radius;
+  std::span<const std::uint32_t> leaf;  // the level-0 node holding each particle (0xffffffff: none)
+};
+// The frame's view as the cull reads it: the frustum's five inward planes (a point x is inside
+// plane k when dot(normal[k], x) + offset[k] >= 0), the camera, the near plane and the tiers.
+struct CullView {
+  std::array<render::Vec3, 5> normal;
+  std::array<double, 5> offset{};
+  render::Vec3 position, forward;
+  double focal_px = 0, near = 0;
+  double t0 = 0, t1 = 0, t2 = 0, t3 = 0, band = 0;
+};
+// VkDrawIndirectCommand.
+struct DrawArgs {
+  std::uint32_t vertex_count = 0, instance_count = 0, first_vertex = 0, first_instance = 0;
+};
+struct CullOutput {
+  static constexpr std::uint8_t kUntested = 0, kOpen = 1, kCulled = 2, kFar = 3;
+  std::array<std::vector<std::uint8_t>, kLevels> state;  // per node: what the walk did with it
+  // The visible particles of the open level-0 nodes, ascending, with view depth, screen diameter
+  // and tier (0 = T0 .. 4 = T-infinity).
+  std::vector<std::uint32_t> particle;
+  std::vector<double> depth, size;
+  std::vector<std::uint8_t> tier;
+  // One indirect draw per tier: a quad (6 vertices) an instance, instance_count the tier's visible
+  // particles, first_instance where its list starts in the tier lists (read back when asked).
+  std::array<DrawArgs, 5> args;
+  std::vector<std::uint32_t> tier_lists;
+};
+// Per frame: a dispatch per level decides each node from its parent's decision (tested when the
+// parent is open or it is a top node; culled, far or open by the reference's box tests with their
+// slack); one invocation a particle tests and classifies the particles of open level-0 nodes; then
+// per 256 particles counts, a scan over the blocks and a scatter in particle order write the
+// visible list and the per-tier lists, and one invocation the five indirect-draw records. fp64,
+// every expression `precise`, in the reference's order of operations.
+class CullPass {
+ public:
+  // Particles one call takes at most: the scan then loops over at most 16,384 blocks (lavapipe's
+  // loop limit, R1-BKD-073).
+  static constexpr std::size_t kMaxParticles = std::size_t{1} << 22;
+  static Result<CullPass> build(Context& ctx);
+  // Whether a scene of this many particles and nodes (all levels) is within kMaxParticles and the
+  // device's storage range; run refuses one that is not.
+  bool fits(std::size_t particles, std::size_t nodes) const;
+  // Input error: more than kMaxParticles, inconsistent sizes, or a buffer past the device's range.
+  Result<CullOutput> run(const CullScene& scene, const CullView& view, bool read_tier_lists = false);
+  // The buffers the last run left on the device: the indirect-draw records and the tier lists.
+  std::uint32_t args_buffer() const { return buffers_[kArgs]; }
+  std::uint32_t tier_list_buffer() const { return buffers_[kLists]; }
+
+  CullPass() = default;
+  CullPass(CullPass&& o) noexcept { *this = std::move(o); }
+  CullPass& operator=(CullPass&& o) noexcept;
+  CullPass(const CullPass&) = delete;
+  CullPass& operator=(const CullPass&) = delete;
+  ~CullPass();
+
+ private:
+  enum : std::size_t { kNodes, kParents, kState, kPosition, kRadius, kLeaf, kCode, kParams, kCounts, kArgs, kLists, kOut, kBuffers };
+  Context* ctx_ = nullptr;
+  std::uint32_t nodes_ = 0, mark_ = 0, count_ = 0, scan_ = 0, args_ = 0, scatter_ = 0;
+  std::array<std::uint32_t, kBuffers> buffers_{};
 };
 
 // The pinhole camera of a frame as the impostor pass needs it (render::CameraFrame and the image

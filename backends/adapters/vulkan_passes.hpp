@@ -1,0 +1,15 @@
+// The vulkan backend's frame passes that its tests call directly (internal to backends/adapters).
+#pragma once
+
+#include "r1/accel/vulkan.hpp"
+#include "render/cull.hpp"
+
+namespace r1::backends {
+
+// The frame's cull on the device (R1-BKD-074): the scene flattened for vk::CullPass, its visible
+// list taken as is, and the far nodes and the walk's counts from the device's node decisions by
+// the reference's walk order (R1-RND-074).
+Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::View& v, const render::CameraFrame& f,
+                      render::CullResult& out, render::CullStats& stats);
+
+}  // namespace r1::backends
