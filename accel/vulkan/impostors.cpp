@@ -84,31 +84,14 @@ void main() {
 )";
 
 // The reference's ray-shape intersections (shapes.cpp) and the headlight, shared by the compute
-// and raster passes (after kPixelRay).
+// and raster passes (after kPixelRay and kRayRoots).
 constexpr const char* kShapes = R"(
 const double kInvSqrt3 = 0.57735026918962576450914878050196LF;
 const double kInvSqrt2 = 0.70710678118654752440084436210485LF;
 const double kTorusMajor = 0.65LF;
 const double kTorusMinor = 0.35LF;
 const double kTorusResidual = 1e-9LF;
-const double kNear = 1e-3LF;
-const double kPi = 3.14159265358979323846LF;
 const int kPolishSteps = 8;
-
-double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
-double copysign_of(double m, double s) { return (unpackDouble2x32(s).y >> 31) != 0u ? -abs(m) : abs(m); }
-
-int quadratic_roots(double a, double bh, double c, double disc, out double r0, out double r1) {
-  r0 = 0.0LF; r1 = 0.0LF;
-  if (!(disc >= 0.0LF)) return 0;
-  precise double s = sqrt(disc);
-  precise double q = -(bh + copysign_of(s, bh));
-  if (q == 0.0LF) return 2;
-  precise double x0 = q / a;
-  precise double x1 = c / q;
-  if (x0 > x1) { r0 = x1; r1 = x0; } else { r0 = x0; r1 = x1; }
-  return 2;
-}
 
 struct Span { double te; double tx; dvec3 ne; dvec3 nx; bool empty; };
 
@@ -401,10 +384,10 @@ Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
   pass.ctx_ = &ctx;
   pass.mode_ = mode;
   if (mode == Mode::kCompute) {
-    R1_ASSIGN(pass.pipeline_, ctx.compute_compile(std::string(kComputeHeader) + "#define CAMERA cam\n" + detail::kPixelRay + kShapes + kComputeMain, "impostors"));
+    R1_ASSIGN(pass.pipeline_, ctx.compute_compile(std::string(kComputeHeader) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kShapes + kComputeMain, "impostors"));
   } else {
     R1_ASSIGN(pass.pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexMain,
-                                                   std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + kShapes + kFragmentMain, "impostors"));
+                                                   std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kShapes + kFragmentMain, "impostors"));
   }
   return pass;
 }

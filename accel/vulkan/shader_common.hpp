@@ -101,4 +101,28 @@ dvec3 pixel_dir(uint x, uint y, uint width, uint height) {
 }
 )";
 
+// The ray casts' shared pieces (after kPixelRay): the near plane and pi of the reference
+// (reference/render/shapes.cpp), +infinity, copysign, and the reference's stable quadratic roots
+// of a t^2 + 2 bh t + c with the discriminant given, ascending (0 or 2 roots; q = 0 gives two
+// zeros, as the reference does).
+inline constexpr const char* kRayRoots = R"(
+const double kNear = 1e-3LF;
+const double kPi = 3.14159265358979323846LF;
+
+double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
+double copysign_of(double m, double s) { return (unpackDouble2x32(s).y >> 31) != 0u ? -abs(m) : abs(m); }
+
+int quadratic_roots(double a, double bh, double c, double disc, out double r0, out double r1) {
+  r0 = 0.0LF; r1 = 0.0LF;
+  if (!(disc >= 0.0LF)) return 0;
+  precise double s = sqrt(disc);
+  precise double q = -(bh + copysign_of(s, bh));
+  if (q == 0.0LF) return 2;
+  precise double x0 = q / a;
+  precise double x1 = c / q;
+  if (x0 > x1) { r0 = x1; r1 = x0; } else { r0 = x0; r1 = x1; }
+  return 2;
+}
+)";
+
 }  // namespace r1::vk::detail

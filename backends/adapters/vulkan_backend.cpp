@@ -1,7 +1,7 @@
 // The vulkan backend (spec/backends.md R1-BKD-065..070): on accel/vulkan's context the frame's
-// cull, its T1/T2 impostor pass (a graphics pipeline, or a compute shader), the splats' depth sort
-// and its field and composite pass, and the spectral solver's and the focus's exact kernels;
-// edges, splat binning, labels and the other epoch work on the host (the reference's passes, the
+// cull, its T1/T2 impostor pass (a graphics pipeline, or a compute shader), its edge tubes, the
+// splats' depth sort and its field and composite pass, and the spectral solver's and the focus's
+// exact kernels; edge bundling, splat binning, labels and the other epoch work on the host (the reference's passes, the
 // cpu backend's stages). Its epochs are the reference's bytes. Its 13.1 device is the Vulkan device on the same context.
 #include <algorithm>
 #include <cstdlib>
@@ -60,6 +60,7 @@ ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
 struct PassState {
   std::shared_ptr<vk::Context> ctx;
   vk::CullPass cull;
+  vk::EdgePass edges;
   vk::DepthSort splat_sort;
   vk::ImpostorPass impostors;
   vk::CompositePass composite;
@@ -153,6 +154,33 @@ Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::
       for (std::size_t c = children.size(); c-- > 0;) stack.push_back({l - 1, children[c]});
     }
   }
+  return Status::ok();
+}
+
+Status edges_on_device(vk::EdgePass& pass, std::span<const render::EdgeTube> tubes, const render::View& v,
+                       const render::CameraFrame& f, render::OpaqueLayer& layer) {
+  vk::EdgeData ed;
+  ed.time = v.time;
+  for (const render::EdgeTube& tube : tubes) {
+    if (tube.rows.empty()) continue;
+    const double row[16] = {tube.a.x, tube.a.y, tube.a.z, tube.b.x,  tube.b.y,  tube.b.z,  tube.rho,  tube.stripes,
+                            tube.speed, tube.ca.x, tube.ca.y, tube.ca.z, tube.cb.x, tube.cb.y, tube.cb.z, 0.0};
+    const int first = tube.rows.front().y, count = tube.rows.back().y - first + 1;
+    if (first < 0 || count <= 0 || first + count > v.height)
+      return Status::internal("vulkan edges: a tube's rows are not ascending rows of the image");
+    const auto at = static_cast<std::uint32_t>(ed.spans.size() / 2);
+    ed.tubes.insert(ed.tubes.end(), row, row + 16);
+    const std::uint32_t meta[4] = {static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(count), at, 0};
+    ed.rows.insert(ed.rows.end(), meta, meta + 4);
+    ed.spans.resize(ed.spans.size() + static_cast<std::size_t>(count) * 2, 0);
+    for (const render::RowSpan& r : tube.rows) {
+      if (r.y < first || r.y >= first + count) return Status::internal("vulkan edges: a tube's rows are not ascending rows of the image");
+      const std::size_t k = (std::size_t{at} + static_cast<std::size_t>(r.y - first)) * 2;
+      ed.spans[k] = r.x0, ed.spans[k + 1] = r.x1;
+    }
+  }
+  R1_ASSIGN(const bool drawn, pass.draw(camera_of(v, f), ed, layer.t, layer.color, layer.owner));
+  if (!drawn) render::draw_edge_tubes(tubes, v, f, layer);  // a tile past lavapipe's loop limit (R1-BKD-073)
   return Status::ok();
 }
 
@@ -309,6 +337,11 @@ std::unique_ptr<Backend> make_vulkan_backend() {
   auto cull = vk::CullPass::build(*state->ctx);
   if (!cull.is_ok()) throw std::invalid_argument(cull.status().message());
   state->cull = std::move(cull).value();
+  // The edge tubes (R1-BKD-075) unless $R1_VULKAN_EDGES=host.
+  const bool edges_on_the_device = on_device_unless("R1_VULKAN_EDGES");
+  auto edges = vk::EdgePass::build(*state->ctx);
+  if (!edges.is_ok()) throw std::invalid_argument(edges.status().message());
+  state->edges = std::move(edges).value();
   // The splats' depth sort (R1-BKD-072, R1-RND-079); beyond the device sort's keys, the host's.
   auto sort = vk::DepthSort::build(*state->ctx);
   if (!sort.is_ok()) throw std::invalid_argument(sort.status().message());
@@ -328,6 +361,9 @@ std::unique_ptr<Backend> make_vulkan_backend() {
       }
       return cull_on_device(state->cull, s, v, f, out, stats);
     };
+  if (edges_on_the_device)
+    passes.edges = [state](std::span<const render::EdgeTube> tubes, const render::View& v, const render::CameraFrame& f,
+                           render::OpaqueLayer& layer) { return edges_on_device(state->edges, tubes, v, f, layer); };
   passes.impostors = [state](std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
                              render::OpaqueLayer& layer) { return draw_on_device(*state, list, v, f, layer); };
   passes.composite = [state](const render::CompositeInput& in, render::Image& image, render::FrameStats& st) {
@@ -387,7 +423,8 @@ std::unique_ptr<Backend> make_vulkan_backend() {
           "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes, and frames drawn with the neural "
           "field, on the host); the cull a compute pass over the hierarchy"
           + std::string(cull_on_the_device ? "" : " (off: R1_VULKAN_CULL=host)") +
-          "; the splats' depth sort a radix sort on the device; edges, splat binning and labels the reference's on "
+          "; the edge tubes a compute pass over 16-pixel tiles" + std::string(edges_on_the_device ? "" : " (off: R1_VULKAN_EDGES=host)") +
+          "; the splats' depth sort a radix sort on the device; bundling, splat binning and labels the reference's on "
           "the host; " + epoch + " (the reference's bytes)",
       std::move(stages), Domain::kFixedQ32, std::move(passes), std::move(device).value());
 }

@@ -3,6 +3,7 @@
 
 #include "r1/accel/vulkan.hpp"
 #include "render/cull.hpp"
+#include "render/passes.hpp"
 
 namespace r1::backends {
 
@@ -11,5 +12,11 @@ namespace r1::backends {
 // the reference's walk order (R1-RND-074).
 Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::View& v, const render::CameraFrame& f,
                       render::CullResult& out, render::CullStats& stats);
+
+// The frame's edge tubes on the device (R1-BKD-075): the tubes flattened for vk::EdgePass, drawn
+// over the layer; when the pass declines (a tile past lavapipe's loop limit), the reference's
+// draw_edge_tubes.
+Status edges_on_device(vk::EdgePass& pass, std::span<const render::EdgeTube> tubes, const render::View& v,
+                       const render::CameraFrame& f, render::OpaqueLayer& layer);
 
 }  // namespace r1::backends

@@ -69,6 +69,36 @@ void draw_impostors(std::span<const Impostor> impostors, const View& v, const Ca
 // A backend's impostor pass: the same contract as draw_impostors on a fresh layer (R1-RND-076).
 using ImpostorPass = std::function<Status(std::span<const Impostor>, const View&, const CameraFrame&, OpaqueLayer&)>;
 
+// Row y's pixels [x0, x1): a tube's capsule may cover them (tube_spans, renderer.hpp).
+struct RowSpan {
+  int y = 0, x0 = 0, x1 = 0;
+};
+
+// One edge tube as the frame draws it (R1-RND-063..066, 081): the axis a -> b (cut back at
+// opened particles), radius rho, the flow strip's stripes and speed (cycles per second), the end
+// colours, and the rows of pixels its capsule can cover, ascending (tube_spans).
+struct EdgeTube {
+  Vec3 a, b;
+  double rho = 0, stripes = 1, speed = 0;
+  Vec3 ca, cb;
+  std::vector<RowSpan> rows;
+};
+
+// The frame's edge tubes in drawing order (R1-RND-064's bundling, visible endpoints only), with
+// the bundling counts written into `stats` (edges in view, considered, drawn). Tubes with no row
+// to draw are left out.
+std::vector<EdgeTube> edge_tubes(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled, FrameStats& stats);
+
+// The reference's edge pass (R1-RND-063..066): for each tube in order and each pixel of its
+// rows, the ray through the pixel centre hits the tube's open wall nearer than the layer's t,
+// which then takes the hit's t, the strip-shaded colour and owner kEdge. So the nearest hit wins,
+// and an exact tie keeps what was there (an impostor, or an earlier tube).
+void draw_edge_tubes(std::span<const EdgeTube> tubes, const View& v, const CameraFrame& f, OpaqueLayer& layer);
+
+// A backend's edge pass: the same contract as draw_edge_tubes on the layer the impostors left
+// (R1-RND-081).
+using EdgePass = std::function<Status(std::span<const EdgeTube>, const View&, const CameraFrame&, OpaqueLayer&)>;
+
 // One T3 splat (R1-RND-040..045): the particle, its view depth and pixel centre, the conic (the
 // inverse of its projected 2D covariance [[ca, cb], [cb, cc]]), its opacity and colour. Its alpha
 // at pixel centre (x, y) is min(0.99, opacity exp(-q / 2)), q the conic's quadratic form of
@@ -149,6 +179,7 @@ using CullPass = std::function<Status(const Scene&, const View&, const CameraFra
 struct FramePasses {
   CullPass cull;
   ImpostorPass impostors;
+  EdgePass edges;
   CompositePass composite;
   SplatSortPass splat_sort;
 };

@@ -365,11 +365,7 @@ void draw_impostors(std::span<const Impostor> impostors, const View& v, const Ca
   }
 }
 
-namespace {
-
-// Edge tubes with the flow strip (R1-RND-063..066), drawn into the opaque layer after the impostors.
-void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled, OpaqueLayer& op, FrameStats& st) {
-  const int W = op.width;
+std::vector<EdgeTube> edge_tubes(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled, FrameStats& st) {
   const std::vector<double> size = screen_sizes(s, v, f, culled);
   BundleStats bs;
   const std::vector<Tube> tubes = bundle(s, v, f, size, bs);
@@ -388,6 +384,7 @@ void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullR
     const auto q = static_cast<std::uint32_t>(p);
     return s.content->has(q) && size[q] > v.tiers.t0 ? s.radius[q] : 0.0;
   };
+  std::vector<EdgeTube> out;
   for (const Tube& tube : tubes) {
     Vec3 a = endpoint_position(s, tube.a), b = endpoint_position(s, tube.b);
     const double cut_a = opened_radius(tube.a), cut_b = opened_radius(tube.b);
@@ -401,29 +398,36 @@ void draw_edges(const Scene& s, const View& v, const CameraFrame& f, const CullR
     const double cap = 0.3 * std::min(endpoint_radius(s, tube.a), endpoint_radius(s, tube.b));
     const double rho = std::min(0.1 * s.median_radius * std::sqrt(tube.w), cap);
     if (!(rho > 0)) continue;
+    EdgeTube et;
+    et.a = a, et.b = b, et.rho = rho;
     // Flow: v = sign(A2) |P_ab| cycles per second along the strip (R-1.0 8.2).
     const double p_ab = tube.degree_a > 0 ? tube.w / tube.degree_a : 0.0;
-    const double speed = (tube.a2 > 0 ? 1.0 : (tube.a2 < 0 ? -1.0 : 0.0)) * std::fabs(p_ab);
-    const double stripes = std::max(1.0, std::round(length(b - a) / (8 * rho)));
-    const Vec3 ca = endpoint_color(s, tube.a), cb = endpoint_color(s, tube.b);
-    for (const RowSpan& row : tube_spans(v, f, a, b, rho))
+    et.speed = (tube.a2 > 0 ? 1.0 : (tube.a2 < 0 ? -1.0 : 0.0)) * std::fabs(p_ab);
+    et.stripes = std::max(1.0, std::round(length(b - a) / (8 * rho)));
+    et.ca = endpoint_color(s, tube.a), et.cb = endpoint_color(s, tube.b);
+    et.rows = tube_spans(v, f, a, b, rho);
+    if (!et.rows.empty()) out.push_back(std::move(et));
+  }
+  return out;
+}
+
+void draw_edge_tubes(std::span<const EdgeTube> tubes, const View& v, const CameraFrame& f, OpaqueLayer& op) {
+  const int W = op.width;
+  for (const EdgeTube& tube : tubes)
+    for (const RowSpan& row : tube.rows)
       for (int x = row.x0; x < row.x1; ++x) {
         const int y = row.y;
         const std::size_t k = static_cast<std::size_t>(y) * W + x;
         const Ray ray = pixel_ray(v, f, x + 0.5, y + 0.5);
-        const auto hit = intersect_tube(a, b, rho, ray, kNear, op.t[k]);
+        const auto hit = intersect_tube(tube.a, tube.b, tube.rho, ray, kNear, op.t[k]);
         if (!hit) continue;
-        const double phase = stripes * hit->u - speed * v.time;
+        const double phase = tube.stripes * hit->u - tube.speed * v.time;
         const double strip = 0.55 + 0.45 * 0.5 * (1 + std::cos(2 * kPi * (phase - std::floor(phase))));
         op.t[k] = hit->hit.t;
-        op.color[k] = headlight((ca * (1 - hit->u) + cb * hit->u) * (0.6 * strip), hit->hit.normal, ray.d);
+        op.color[k] = headlight((tube.ca * (1 - hit->u) + tube.cb * hit->u) * (0.6 * strip), hit->hit.normal, ray.d);
         op.owner[k] = OpaqueLayer::kEdge;
       }
-  }
 }
-
-
-}  // namespace
 
 Result<SplatBins> bin_splats(const Scene& s, const View& v, const CameraFrame& f, const CullResult& culled,
                              const SplatSortPass& sort) {
@@ -625,7 +629,11 @@ Result<Image> render_frame(const Scene& s, const View& v, const RenderOptions& o
   st.impostor_s = seconds_since(t0);
 
   t0 = clock::now();
-  if (v.edges) draw_edges(s, v, f, culled, op, st);
+  if (v.edges) {
+    const std::vector<EdgeTube> tubes = edge_tubes(s, v, f, culled, st);
+    if (passes.edges) R1_TRY(passes.edges(tubes, v, f, op));
+    else draw_edge_tubes(tubes, v, f, op);
+  }
   st.edge_s = seconds_since(t0);
 
   t0 = clock::now();

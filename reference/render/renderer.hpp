@@ -37,9 +37,6 @@ BundleStats bundle_counts(const Scene& scene, const View& view);
 // the columns [x0, x1) whose centres lie within hw pixels of the projected segment, hw bounding
 // the projection of any point within rho of the segment. The part of the segment nearer than
 // 2 rho + kNear to the camera is left out; no rows when all of it is.
-struct RowSpan {
-  int y = 0, x0 = 0, x1 = 0;
-};
 std::vector<RowSpan> tube_spans(const View& view, const CameraFrame& frame, const Vec3& a, const Vec3& b, double rho);
 
 }  // namespace r1::render

@@ -317,6 +317,47 @@ class ImpostorPass {
   std::array<std::uint32_t, 2> target_size_{};
 };
 
+// The frame's edge tubes flattened for the device (R1-BKD-075; the host makes them with the
+// reference's edge_tubes): per tube 16 doubles (a, b, rho, stripes, speed, colour at a, colour at
+// b, 0) and 4 words (its first row, its rows, where its spans start, 0); per row from the first
+// the span [x0, x1) (x0 >= x1: none in that row). `time` drives the flow strip.
+struct EdgeData {
+  std::vector<double> tubes;
+  std::vector<std::uint32_t> rows;
+  std::vector<std::int32_t> spans;
+  double time = 0;
+};
+
+// The edge pass (R1-BKD-075): over the opaque layer the impostors left, per pixel the tubes
+// binned into its 16-pixel tile, in tube order, each whose row span holds the pixel: the
+// reference's open-wall intersection in fp64 (every expression `precise`), a hit nearer than the
+// layer's t taking it with owner -2 and the headlight-shaded strip colour. The strip's cosine is
+// the device's own (det_cos: a Cody-Waite reduction by pi/2 and Taylor series to degree 19),
+// within a few ulps of the host's libm.
+class EdgePass {
+ public:
+  // A tile list longer than this stays below lavapipe's loop limit (R1-BKD-073) only on the host:
+  // draw then declines.
+  static constexpr std::size_t kMaxTileTubes = 65000;
+  static Result<EdgePass> build(Context& ctx);
+  // Draws the tubes over the layer (t, colour, owner; width x height) in place: true when drawn,
+  // false when declined (a tile of more than kMaxTileTubes tubes), the layer then untouched.
+  Result<bool> draw(const ImpostorCamera& camera, const EdgeData& edges, std::span<double> t, std::span<render::Vec3> color,
+                    std::span<std::int64_t> owner);
+
+  EdgePass() = default;
+  EdgePass(EdgePass&& o) noexcept { *this = std::move(o); }
+  EdgePass& operator=(EdgePass&& o) noexcept;
+  EdgePass(const EdgePass&) = delete;
+  EdgePass& operator=(const EdgePass&) = delete;
+  ~EdgePass();
+
+ private:
+  Context* ctx_ = nullptr;
+  std::uint32_t pipeline_ = 0;
+  std::array<std::uint32_t, 8> buffers_{};
+};
+
 // The T-infinity field of one frame, flattened (R1-BKD-070; the host builds it from the
 // reference's FieldFrame). Nodes of every level in one table, level l's node id at global index
 // level_offset[l] + id.
