@@ -26,11 +26,17 @@ layout(std430, binding = 4) readonly buffer O { double opaque[]; };
 layout(std430, binding = 5) writeonly buffer R { float result[]; };
 layout(std430, binding = 6) readonly buffer PR { double prm[]; };
 layout(std430, binding = 7) buffer F { uint flag[]; };
+// The neural field's passes (R1-BKD-076): the samples it is asked at (x, sigma), how many a pixel
+// has, and the network's raw outputs at them.
+layout(std430, binding = 8) buffer E { double entry[]; };
+layout(std430, binding = 9) buffer EC { uint entry_count[]; };
+layout(std430, binding = 10) readonly buffer NO { float nout[]; };
 layout(push_constant) uniform P {
   uint width; uint height; uint y0; uint rows;
   uint child_ptr; uint child; uint member_ptr; uint top_ptr; uint top; uint splat_ptr; uint splat_list;
   uint level0; uint level1; uint level2; uint level3; uint level4;
   uint tiles_x; uint samples; uint field_on; uint tiles; uint seed_lo; uint seed_hi; uint next; uint parent;
+  uint mode;  // 0 the analytic field; 1 list the neural field's samples; 2 composite with their outputs
 } p;
 
 const int kMaxCand = R1_MAX_CANDIDATES;  // build() substitutes the cap
@@ -121,6 +127,8 @@ void main() {
   if (x >= p.width || row >= p.rows) return;
   uint px = row * p.width + x;
   uint64_t pixel = uint64_t(y) * uint64_t(p.width) + uint64_t(x);
+  uint n_entries = 0u;
+  if (p.mode == 1u) entry_count[px] = 0u;
   dvec3 pos = dvec3(prm[0], prm[1], prm[2]);
   dvec3 fwd = dvec3(prm[9], prm[10], prm[11]);
   dvec3 d = pixel_dir(x, y, p.width, p.height);
@@ -220,6 +228,39 @@ void main() {
       precise double inv = 1.0LF / (2.0LF * sigma * sigma);
       precise double reach = cutoff * sigma;
       precise dvec3 xs = dvec3(pos.x + d.x * t, pos.y + d.y * t, pos.z + d.z * t);
+      if (p.mode != 0u) {
+        // The neural field (R1-NRF-031) at the samples some candidate reaches.
+        bool near = false;
+        for (int c = 0; c < nc && !near; ++c) {
+          if (cand_t0[c] > t || cand_t1[c] < t) continue;
+          near = within_reach(xs, nvec(cand_node[c], 1u), node[cand_node[c] * 8u + 7u], reach);
+        }
+        if (!near) continue;
+        uint e = px * p.samples + n_entries;
+        n_entries += 1u;
+        if (p.mode == 1u) {
+          entry[e * 4u] = xs.x; entry[e * 4u + 1u] = xs.y; entry[e * 4u + 2u] = xs.z; entry[e * 4u + 3u] = sigma;
+          continue;
+        }
+        // The heads (R1-NRF-004): kernel sum exp(o0) (expm1(softplus(o0))), density kappa / sigma
+        // times it, colour 3 sigmoid(o1..3), flow sigma o4..6.
+        double o0 = double(nout[e * 7u]);
+        precise double w = o0 > 30.0LF ? det_exp(o0) - 1.0LF : det_exp(o0);
+        if (!(w > 0.0LF)) continue;
+        precise double density = prm[37] / sigma * w;
+        precise double alpha = 1.0LF - det_exp(-density * delta);
+        precise dvec3 col = dvec3(3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 1u])))),
+                                  3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 2u])))),
+                                  3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 3u])))));
+        precise dvec3 fw = dvec3(double(nout[e * 7u + 4u]) * sigma, double(nout[e * 7u + 5u]) * sigma,
+                                 double(nout[e * 7u + 6u]) * sigma);
+        s_t = t; s_alpha = alpha;
+        s_color = col;
+        s_flow = fw;
+        have_s = true;
+        field_t *= 1.0LF - alpha;
+        continue;
+      }
       acc_w = 0.0LF; acc_c = dvec3(0.0LF); acc_f = dvec3(0.0LF);
       bool any = false;
       for (int c = 0; c < nc; ++c) {
@@ -269,6 +310,11 @@ void main() {
       have_s = false;
     }
   }
+  if (p.mode == 1u) {
+    entry_count[px] = n_entries;
+    if (n_entries > 0u) atomicAdd(flag[2], n_entries);
+    return;
+  }
   if (t_op < inf()) {
     color = dvec3(color.x + opaque[px * 4u + 1u] * T, color.y + opaque[px * 4u + 2u] * T, color.z + opaque[px * 4u + 3u] * T);
     T = 0.0LF;
@@ -284,7 +330,135 @@ void main() {
 }
 )";
 
+// The neural field's network at the listed samples (R1-BKD-076, R1-NRF-002..006): one invocation
+// a sample, the reference's query (the similarity beyond tau_hi, the cube, the tau feature), hash
+// grid features and the three layers in float, summed in the reference's order (infer_layer),
+// every expression `precise`. log2 is det_log2 (a frexp and the atanh series); the host's libm
+// log2 may differ in the last bit, which the float tau feature almost never keeps.
+constexpr const char* kInfer = R"(#version 460
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer E { double entry[]; };
+layout(std430, binding = 1) readonly buffer C { uint entry_count[]; };
+layout(std430, binding = 2) readonly buffer W { float wt[]; };
+layout(std430, binding = 3) writeonly buffer O { float nout[]; };
+layout(std430, binding = 4) readonly buffer NP { double np[]; };  // lo, size, centroid, tau_lo, tau_hi, log2(tau_hi / tau_lo)
+layout(std430, binding = 5) readonly buffer RS { uint res[]; };
+layout(push_constant) uniform P {
+  uint pixels; uint slots; uint levels; uint table; uint hidden; uint inputs; uint w1; uint b1; uint w2; uint b2; uint w3; uint b3;
+} p;
+
+const uint kPrime1 = 2654435761u, kPrime2 = 805459861u;
+uint invocation() { return gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u; }
+
+// log2 v for positive finite v: v = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(s),
+// s = (m - 1) / (m + 1), |s| <= 0.172, the series to s^23.
+double det_log2(double v) {
+  int e;
+  double m = frexp(v, e);
+  if (m < 0.70710678118654752440LF) { m = m * 2.0LF; e -= 1; }
+  precise double s = (m - 1.0LF) / (m + 1.0LF);
+  precise double s2 = s * s;
+  precise double series = 1.0LF + s2 * (1.0LF / 3.0LF + s2 * (1.0LF / 5.0LF + s2 * (1.0LF / 7.0LF + s2 * (1.0LF / 9.0LF
+      + s2 * (1.0LF / 11.0LF + s2 * (1.0LF / 13.0LF + s2 * (1.0LF / 15.0LF + s2 * (1.0LF / 17.0LF + s2 * (1.0LF / 19.0LF
+      + s2 * (1.0LF / 21.0LF + s2 * (1.0LF / 23.0LF)))))))))));
+  precise double ln = 2.0LF * s * series;
+  precise double r = double(e) + ln * 1.44269504088896340736LF;
+  return r;
+}
+
+uint corner_index(uint x, uint y, uint z, uint r) {
+  uint64_t side = uint64_t(r) + 1ul;
+  if (side * side * side <= uint64_t(p.table)) return uint(uint64_t(x) + side * (uint64_t(y) + side * uint64_t(z)));
+  return (x ^ (y * kPrime1) ^ (z * kPrime2)) & (p.table - 1u);
+}
+
+float features[65];
+float h1[256];
+float h2[256];
+
+void main() {
+  uint e = invocation();
+  uint pxl = e / p.slots, j = e - pxl * p.slots;
+  if (pxl >= p.pixels || j >= entry_count[pxl]) return;
+  dvec3 x = dvec3(entry[e * 4u], entry[e * 4u + 1u], entry[e * 4u + 2u]);
+  double sigma = entry[e * 4u + 3u];
+  double tau_lo = np[7], tau_hi = np[8];
+  precise double s2 = sigma * sigma;
+  if (s2 > tau_hi) {
+    precise double k = sqrt(tau_hi) / sigma;
+    precise dvec3 r = dvec3(x.x - np[4], x.y - np[5], x.z - np[6]);
+    precise dvec3 y = dvec3(np[4] + r.x * k, np[5] + r.y * k, np[6] + r.z * k);
+    x = y;
+  }
+  precise double ux = (x.x - np[0]) / np[3];
+  precise double uy = (x.y - np[1]) / np[3];
+  precise double uz = (x.z - np[2]) / np[3];
+  double u[3] = double[3](clamp(ux, 0.0LF, 1.0LF), clamp(uy, 0.0LF, 1.0LF), clamp(uz, 0.0LF, 1.0LF));
+  double tau = clamp(s2, tau_lo, tau_hi);
+  precise double tq = tau_hi > tau_lo ? det_log2(tau / tau_lo) / np[9] : 0.0LF;
+  precise double qsigma = sqrt(tau) / np[3];
+  for (uint l = 0u; l < p.levels; ++l) {
+    uint r = res[l];
+    uint i0[3];
+    double fr[3];
+    for (int k = 0; k < 3; ++k) {
+      precise double pk = u[k] * double(r);
+      double fl = min(floor(pk), double(r - 1u));
+      i0[k] = uint(fl);
+      precise double f = pk - fl;
+      fr[k] = f;
+    }
+    precise float a = 0.0, b = 0.0;
+    for (uint c = 0u; c < 8u; ++c) {
+      uint dx = c & 1u, dy = (c >> 1) & 1u, dz = (c >> 2) & 1u;
+      precise double w = (dx != 0u ? fr[0] : 1.0LF - fr[0]) * (dy != 0u ? fr[1] : 1.0LF - fr[1]) * (dz != 0u ? fr[2] : 1.0LF - fr[2]);
+      float wf = float(w);
+      uint idx = (l * p.table + corner_index(i0[0] + dx, i0[1] + dy, i0[2] + dz, r)) * 2u;
+      a += wf * wt[idx];
+      b += wf * wt[idx + 1u];
+    }
+    precise double fade = 2.0LF / (double(r) * qsigma);
+    float mask = float(min(1.0LF, fade * fade));
+    precise float fa = mask * a;
+    precise float fb = mask * b;
+    features[2u * l] = fa;
+    features[2u * l + 1u] = fb;
+  }
+  features[2u * p.levels] = float(tq);
+  for (uint jj = 0u; jj < p.hidden; ++jj) {
+    precise float acc = 0.0;
+    uint row = p.w1 + jj * p.inputs;
+    for (uint i = 0u; i < p.inputs; ++i) acc += features[i] * wt[row + i];
+    acc += wt[p.b1 + jj];
+    h1[jj] = max(acc, 0.0);
+  }
+  for (uint jj = 0u; jj < p.hidden; ++jj) {
+    precise float acc = 0.0;
+    uint row = p.w2 + jj * p.hidden;
+    for (uint i = 0u; i < p.hidden; ++i) acc += h1[i] * wt[row + i];
+    acc += wt[p.b2 + jj];
+    h2[jj] = max(acc, 0.0);
+  }
+  for (uint jj = 0u; jj < 7u; ++jj) {
+    precise float acc = 0.0;
+    uint row = p.w3 + jj * p.hidden;
+    for (uint i = 0u; i < p.hidden; ++i) acc += h2[i] * wt[row + i];
+    acc += wt[p.b3 + jj];
+    nout[e * 7u + jj] = acc;
+  }
+}
+)";
+
 }  // namespace
+
+bool CompositePass::infers(const NeuralData& n) {
+  const std::uint64_t in = n.inputs(), h = n.hidden;
+  // Loop iterations an invocation runs (a level's 3 + 8, then the layers) below lavapipe's 65,535.
+  const std::uint64_t iterations = std::uint64_t{n.levels} * 11 + in * h + h * h + 7 * h + 2 * h + 7;
+  return n.levels >= 1 && n.levels <= 32 && h >= 1 && h <= 256 && n.log2_table >= 1 && n.log2_table <= 24 &&
+         n.resolution.size() == n.levels && iterations <= 60000;
+}
 
 Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& constants, std::uint32_t max_candidates) {
   if (constants.taylor.size() != 14) return Status::input("vulkan composite: det_exp needs 14 Taylor coefficients");
@@ -297,7 +471,48 @@ Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& con
   source.replace(source.find(key), key.size(), std::to_string(max_candidates));
   source.replace(source.find(ray), ray.size(), detail::kPixelRay);
   R1_ASSIGN(pass.pipeline_, ctx.compute_compile(source, "composite"));
+  R1_ASSIGN(pass.infer_, ctx.compute_compile(kInfer, "neural_infer"));
   return pass;
+}
+
+Result<std::array<std::uint32_t, 12>> CompositePass::upload_neural(const NeuralData& n, std::uint32_t slots) {
+  if (!infers(n)) return Status::input("vulkan composite: the neural field's architecture is not inferred on the device");
+  const std::size_t table = std::size_t{1} << n.log2_table, ni = n.inputs(), h = n.hidden;
+  const std::size_t w1 = std::size_t{n.levels} * table * 2, b1 = w1 + h * ni, w2 = b1 + h, b2 = w2 + h * h, w3 = b2 + h,
+                    b3 = w3 + 7 * h;
+  if (n.params.size() != b3 + 7) return Status::input("vulkan composite: the neural field's parameters do not match its architecture");
+  const double np[10] = {n.lo.x, n.lo.y, n.lo.z, n.size, n.centroid.x, n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range};
+  const auto put = [&](std::size_t which, auto span) -> Status {
+    R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
+    return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);
+  };
+  R1_TRY(put(11, std::span<const float>(n.params)));
+  R1_TRY(put(12, std::span<const double>(np, 10)));
+  R1_TRY(put(13, std::span<const std::uint32_t>(n.resolution)));
+  const auto u32 = [](std::size_t v) { return static_cast<std::uint32_t>(v); };
+  return std::array<std::uint32_t, 12>{0, slots, n.levels, u32(table), n.hidden, u32(ni), u32(w1), u32(b1), u32(w2), u32(b2), u32(w3), u32(b3)};
+}
+
+Result<std::vector<float>> CompositePass::infer(const NeuralData& n, std::span<const double> queries) {
+  const std::size_t count = queries.size() / 4;
+  if (queries.size() != count * 4) return Status::input("vulkan neural inference: queries are 4 doubles each");
+  if (count * 32 > ctx_->info().max_buffer || count >= 0xffffffffu) return Status::input("vulkan neural inference: too many queries");
+  R1_ASSIGN(auto push, upload_neural(n, 1));
+  push[0] = static_cast<std::uint32_t>(count);
+  const std::vector<std::uint32_t> ones(std::max<std::size_t>(count, 1), 1u);
+  R1_TRY(ctx_->buffer_ensure(buffers_[8], std::max<std::size_t>(queries.size_bytes(), 16)));
+  R1_TRY(ctx_->buffer_write(buffers_[8], detail::bytes_of(queries), 0));
+  R1_TRY(ctx_->buffer_ensure(buffers_[9], ones.size() * 4));
+  R1_TRY(ctx_->buffer_write(buffers_[9], detail::bytes_of(std::span<const std::uint32_t>(ones)), 0));
+  R1_TRY(ctx_->buffer_ensure(buffers_[10], std::max<std::size_t>(count * 28, 16)));
+  const Slot slots[] = {{0, buffers_[8]}, {1, buffers_[9]}, {2, buffers_[11]}, {3, buffers_[10]}, {4, buffers_[12]}, {5, buffers_[13]}};
+  std::array<std::uint8_t, sizeof push> bytes;
+  std::memcpy(bytes.data(), push.data(), sizeof push);
+  R1_TRY(ctx_->dispatch(infer_, slots, detail::groups_for(count), bytes));
+  R1_ASSIGN(const auto out, ctx_->buffer_read(buffers_[10], 0, count * 28));
+  std::vector<float> result(count * 7);
+  std::memcpy(result.data(), out.data(), out.size());
+  return result;
 }
 
 Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, const SplatData& splats,
@@ -338,31 +553,61 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   R1_TRY(ensure_write(1, std::span<const std::uint32_t>(idx)));
   R1_TRY(ensure_write(2, std::span<const double>(field.members.empty() ? one : field.members)));
   R1_TRY(ensure_write(3, std::span<const double>(splats.splats.empty() ? one : splats.splats)));
+  // The neural field (R1-BKD-076): its parameters, query constants and resolutions.
+  const NeuralData* nd = field.enabled ? field.neural : nullptr;
+  std::array<std::uint32_t, 12> infer_push{};
+  if (nd != nullptr) {
+    R1_ASSIGN(infer_push, upload_neural(*nd, std::max<std::uint32_t>(field.samples, 1)));
+    prm[37] = nd->kappa;
+  }
   R1_TRY(ensure_write(6, std::span<const double>(prm)));
-  // Bands of rows whose opaque layer and results fit one storage buffer each.
-  const std::size_t band = std::max<std::size_t>(1, std::min<std::size_t>(cam.height, ctx_->info().max_buffer / (std::size_t{cam.width} * 32)));
+  // Bands of rows whose opaque layer and results fit one storage buffer each, and with the neural
+  // field, whose listed samples do too.
+  std::size_t per_row = std::size_t{cam.width} * 32;
+  if (nd != nullptr) per_row = std::max(per_row, std::size_t{cam.width} * std::max<std::uint32_t>(field.samples, 1) * 32);
+  const std::size_t band = std::max<std::size_t>(1, std::min<std::size_t>(cam.height, ctx_->info().max_buffer / per_row));
+  if (nd != nullptr) {
+    const std::size_t slots = band * cam.width * std::max<std::uint32_t>(field.samples, 1);
+    R1_TRY(ctx_->buffer_ensure(buffers_[8], slots * 32));
+    R1_TRY(ctx_->buffer_ensure(buffers_[9], band * cam.width * 4));
+    R1_TRY(ctx_->buffer_ensure(buffers_[10], slots * 28));
+  }
   R1_TRY(ctx_->buffer_ensure(buffers_[4], band * cam.width * 32));
   R1_TRY(ctx_->buffer_ensure(buffers_[5], band * cam.width * 28));
-  R1_TRY(ctx_->buffer_ensure(buffers_[7], 8));
-  const std::uint32_t zero[2] = {0, 0};
+  R1_TRY(ctx_->buffer_ensure(buffers_[7], 16));
+  const std::uint32_t zero[4] = {0, 0, 0, 0};
   R1_TRY(ctx_->buffer_write(buffers_[7], detail::bytes_of(std::span<const std::uint32_t>(zero)), 0));
-  Slot slots[8];
-  for (std::uint32_t s = 0; s < 8; ++s) slots[s] = {s, buffers_[s]};
+  Slot slots[11];
+  for (std::uint32_t s = 0; s < (nd != nullptr ? 11u : 8u); ++s) slots[s] = {s, buffers_[s]};
+  const std::span<const Slot> bound(slots, nd != nullptr ? 11 : 8);
+  const Slot infer_slots[] = {{0, buffers_[8]}, {1, buffers_[9]}, {2, buffers_[11]}, {3, buffers_[10]}, {4, buffers_[12]}, {5, buffers_[13]}};
   std::vector<float> flows(pixels * 3, 0.0f);
   host_pixels.clear();
   for (std::size_t y0 = 0; y0 < cam.height; y0 += band) {
     const std::size_t rows = std::min<std::size_t>(band, cam.height - y0), n = rows * cam.width, at = y0 * cam.width;
     R1_TRY(ctx_->buffer_write(buffers_[4], detail::bytes_of(opaque.subspan(at * 4, n * 4)), 0));
-    const std::array<std::uint32_t, 24> push{cam.width, cam.height, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows),
+    std::array<std::uint32_t, 25> push{cam.width, cam.height, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows),
                                              child_ptr, child, member_ptr, top_ptr, top, splat_ptr, splat_list,
                                              field.level_offset[0], field.level_offset[1], field.level_offset[2],
                                              field.level_offset[3], field.level_offset[4], field.tiles_x, field.samples,
                                              field.enabled ? 1u : 0u, static_cast<std::uint32_t>(field.top_ptr.empty() ? 0 : field.top_ptr.size() - 1),
                                              static_cast<std::uint32_t>(field.seed), static_cast<std::uint32_t>(field.seed >> 32), next,
-                                             parent};
+                                             parent, 0};
     std::array<std::uint8_t, sizeof push> push_bytes;
+    const std::array<std::uint32_t, 3> groups = {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1};
+    if (nd != nullptr) {
+      // List the samples, infer the network at them, then composite with its outputs.
+      push[24] = 1;
+      std::memcpy(push_bytes.data(), push.data(), sizeof push);
+      R1_TRY(ctx_->dispatch(pipeline_, bound, groups, push_bytes));
+      infer_push[0] = static_cast<std::uint32_t>(n);
+      std::array<std::uint8_t, sizeof infer_push> ib;
+      std::memcpy(ib.data(), infer_push.data(), sizeof infer_push);
+      R1_TRY(ctx_->dispatch(infer_, infer_slots, detail::groups_for(std::uint64_t{n} * std::max<std::uint32_t>(field.samples, 1)), ib));
+      push[24] = 2;
+    }
     std::memcpy(push_bytes.data(), push.data(), sizeof push);
-    R1_TRY(ctx_->dispatch(pipeline_, slots, {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));
+    R1_TRY(ctx_->dispatch(pipeline_, bound, groups, push_bytes));
     R1_ASSIGN(const auto out, ctx_->buffer_read(buffers_[5], 0, n * 28));
     for (std::size_t k = 0; k < n; ++k) {
       float v[7];
@@ -372,9 +617,10 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
       std::copy(v + 4, v + 7, flows.begin() + static_cast<std::ptrdiff_t>((at + k) * 3));
     }
   }
-  R1_ASSIGN(const auto flags, ctx_->buffer_read(buffers_[7], 0, 8));
-  std::uint32_t f[2];
-  std::memcpy(f, flags.data(), 8);
+  R1_ASSIGN(const auto flags, ctx_->buffer_read(buffers_[7], 0, 16));
+  std::uint32_t f[4];
+  std::memcpy(f, flags.data(), 16);
+  inferred_ = f[2];
   flow.clear();
   if (f[1] != 0) flow = std::move(flows);
   return Status::ok();

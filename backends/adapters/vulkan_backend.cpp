@@ -4,6 +4,7 @@
 // exact kernels; edge bundling, splat binning, labels and the other epoch work on the host (the reference's passes, the
 // cpu backend's stages). Its epochs are the reference's bytes. Its 13.1 device is the Vulkan device on the same context.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <memory>
 #include <numeric>
@@ -157,6 +158,19 @@ Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::
   return Status::ok();
 }
 
+vk::NeuralData neural_data(const render::NeuralField& f) {
+  vk::NeuralData n;
+  n.levels = f.config.levels, n.log2_table = f.config.log2_table, n.hidden = f.config.hidden;
+  n.resolution = f.resolution;
+  n.lo = f.lo, n.centroid = f.centroid;
+  n.size = f.size, n.tau_lo = f.tau_lo, n.tau_hi = f.tau_hi, n.kappa = f.kappa;
+  n.log2_range = f.tau_hi > f.tau_lo ? std::log2(f.tau_hi / f.tau_lo) : 0.0;
+  n.params.reserve(f.grid.size() + f.w1.size() + f.b1.size() + f.w2.size() + f.b2.size() + f.w3.size() + f.b3.size());
+  for (const std::vector<float>* part : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
+    n.params.insert(n.params.end(), part->begin(), part->end());
+  return n;
+}
+
 Status edges_on_device(vk::EdgePass& pass, std::span<const render::EdgeTube> tubes, const render::View& v,
                        const render::CameraFrame& f, render::OpaqueLayer& layer) {
   vk::EdgeData ed;
@@ -253,11 +267,12 @@ vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
   return fd;
 }
 
+
 Status composite_on_device(PassState& st, const render::CompositeInput& in, render::Image& image, render::FrameStats& stats) {
   const render::View& v = in.view;
   if (in.splats.tiles_x != (v.width + 15) / 16) return Status::internal("vulkan composite: splat tiles are not 16 pixels");
   render::PixelCompositor host(in);  // builds the frame's field; draws the pixels the device leaves
-  const vk::FieldData fd = field_data(host.field(), v);
+  vk::FieldData fd = field_data(host.field(), v);
   vk::SplatData sd;
   for (const render::Splat& sp : in.splats.splats) {
     const double row[12] = {sp.depth, sp.px, sp.py, sp.ca, sp.cb, sp.cc, sp.opacity, sp.color.x, sp.color.y, sp.color.z, 0, 0};
@@ -276,13 +291,18 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
   }
   std::vector<float> flow;
   std::vector<std::uint32_t> left;
-  if (host.field().scene->neural != nullptr && host.field().mixed.empty()) {
-    // A frame drawn with the neural field (R1-NRF-031): the host draws every pixel with the
-    // reference's code. The device has no inference pass yet (spec/neural.md R1-NRF-032).
+  const render::NeuralField* nf = host.field().scene->neural;
+  vk::NeuralData nd;
+  if (nf != nullptr && host.field().mixed.empty()) nd = neural_data(*nf);
+  if (nf != nullptr && host.field().mixed.empty() && !vk::CompositePass::infers(nd)) {
+    // A frame drawn with a neural field whose network the device does not infer (R1-BKD-076):
+    // the host draws every pixel with the reference's code.
     left.resize(pixels);
     for (std::size_t k = 0; k < pixels; ++k) left[k] = static_cast<std::uint32_t>(k);
   } else {
+    if (nf != nullptr && host.field().mixed.empty()) fd.neural = &nd;  // a pure T-infinity frame (R1-NRF-031)
     R1_TRY(st.composite.draw(camera_of(v, in.frame), fd, sd, opaque, image.rgba, flow, left));
+    if (fd.neural != nullptr) stats.field_neural = st.composite.inferred();
   }
   stats.host_pixels = left.size();
   for (const std::uint32_t k : left) {
@@ -420,8 +440,8 @@ std::unique_ptr<Backend> make_vulkan_backend() {
           (mode == vk::ImpostorPass::Mode::kRaster ? "a graphics pipeline (a quad per impostor, one indirect draw)"
                                                      : "a compute shader over 16-pixel tiles") +
           " ray-casting in fp64 with the reference's intersections; the T-infinity field and composite a compute shader "
-          "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes, and frames drawn with the neural "
-          "field, on the host); the cull a compute pass over the hierarchy"
+          "(fp64; rays beyond " + std::to_string(max_candidates) + " candidate nodes on the host), the neural field's "
+          "network a compute pass at the samples it lists; the cull a compute pass over the hierarchy"
           + std::string(cull_on_the_device ? "" : " (off: R1_VULKAN_CULL=host)") +
           "; the edge tubes a compute pass over 16-pixel tiles" + std::string(edges_on_the_device ? "" : " (off: R1_VULKAN_EDGES=host)") +
           "; the splats' depth sort a radix sort on the device; bundling, splat binning and labels the reference's on "

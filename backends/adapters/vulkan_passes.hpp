@@ -3,6 +3,7 @@
 
 #include "r1/accel/vulkan.hpp"
 #include "render/cull.hpp"
+#include "render/neural_field.hpp"
 #include "render/passes.hpp"
 
 namespace r1::backends {
@@ -18,5 +19,8 @@ Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::
 // draw_edge_tubes.
 Status edges_on_device(vk::EdgePass& pass, std::span<const render::EdgeTube> tubes, const render::View& v,
                        const render::CameraFrame& f, render::OpaqueLayer& layer);
+
+// A trained neural field as the device's inference reads it (R1-BKD-076).
+vk::NeuralData neural_data(const render::NeuralField& f);
 
 }  // namespace r1::backends

@@ -131,8 +131,10 @@ void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
 // 3 sigmoid(o1..3) (linear light times brightness, at most 3), flow sigma o4..6.
 FieldValue decode_outputs(const NeuralField& f, const float* o, double sigma) {
   FieldValue v;
-  const double s = softplus(static_cast<double>(o[0]));
-  v.weight = std::expm1(s);
+  // expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one rounding a device
+  // repeats), and expm1(o0) where softplus is o0 (R1-NRF-004).
+  const double o0 = static_cast<double>(o[0]);
+  v.weight = o0 > 30 ? std::expm1(o0) : std::exp(o0);
   v.density = f.kappa / sigma * v.weight;
   v.color = Vec3{3 * sigmoid(static_cast<double>(o[1])), 3 * sigmoid(static_cast<double>(o[2])), 3 * sigmoid(static_cast<double>(o[3]))};
   v.flow = Vec3{static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
@@ -189,20 +191,44 @@ float init_uniform(std::uint64_t seed, std::uint64_t item, std::uint64_t dim, do
 
 }  // namespace
 
+namespace {
+
+// One layer of inference (R1-NRF-006): out[j] = max(0, (sum_i in[i] w[j][i], i ascending from 0)
+// + b[j]) in float, each product and sum rounded (no contraction), ReLU unless `linear`. A device
+// that sums in the same order gets the same bits; the loops run over i outside j so the outputs'
+// independent sums can share vector lanes without changing any sum's order.
+void infer_layer(const float* in, std::uint32_t ni, const float* w, const float* b, std::uint32_t no, bool linear, float* out) {
+  std::fill(out, out + no, 0.0f);
+  for (std::uint32_t i = 0; i < ni; ++i) {
+    const float xi = in[i];
+    for (std::uint32_t j = 0; j < no; ++j) out[j] += xi * w[std::size_t{j} * ni + i];
+  }
+  for (std::uint32_t j = 0; j < no; ++j) {
+    out[j] += b[j];
+    if (!linear) out[j] = std::max(out[j], 0.0f);
+  }
+}
+
+}  // namespace
+
 FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
-  thread_local Mat X, H1, H2, O;
   thread_local std::vector<std::uint32_t> index;
-  thread_local std::vector<float> weight, mask;
+  thread_local std::vector<float> weight, mask, features, h1, h2;
   index.resize(config.levels * 8);
   weight.resize(config.levels * 8);
   mask.resize(config.levels);
+  features.resize(inputs());
+  h1.resize(config.hidden);
+  h2.resize(config.hidden);
   const Location e{index.data(), weight.data(), mask.data()};
-  X.resize(1, inputs());
   const Query q = make_query(*this, x, sigma);
   locate(*this, q, e);
-  gather(*this, e, q.t, X.row(0).data());
-  forward(*this, X, H1, H2, O);
-  return decode_outputs(*this, O.row(0).data(), sigma);
+  gather(*this, e, q.t, features.data());
+  float o[kNeuralOutputs];
+  infer_layer(features.data(), inputs(), w1.data(), b1.data(), config.hidden, false, h1.data());
+  infer_layer(h1.data(), config.hidden, w2.data(), b2.data(), config.hidden, false, h2.data());
+  infer_layer(h2.data(), config.hidden, w3.data(), b3.data(), kNeuralOutputs, true, o);
+  return decode_outputs(*this, o, sigma);
 }
 
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {

@@ -37,7 +37,7 @@ class Context {
  public:
   // Storage-buffer bindings every compute pipeline's layout has (set 0, bindings 0..kSlots-1), and
   // the push-constant bytes it may read.
-  static constexpr std::uint32_t kSlots = 8;
+  static constexpr std::uint32_t kSlots = 12;
   static constexpr std::uint32_t kPushBytes = 128;
 
   // The first device with a compute queue, 64-bit floats and integers in shaders and Vulkan 1.3
@@ -358,6 +358,19 @@ class EdgePass {
   std::array<std::uint32_t, 8> buffers_{};
 };
 
+// A trained neural field (R1-NRF-001..006) as the device's inference reads it (R1-BKD-076): the
+// architecture, the cube and tau range, and every parameter in one float array: the hash grid
+// (levels x 2^log2_table x 2), then w1, b1, w2, b2, w3, b3 (row-major, as NeuralField holds them).
+struct NeuralData {
+  std::uint32_t levels = 0, log2_table = 0, hidden = 0;
+  std::vector<std::uint32_t> resolution;  // cells per side, per level
+  render::Vec3 lo, centroid;
+  double size = 1, tau_lo = 1, tau_hi = 1, kappa = 0;
+  double log2_range = 0;                   // log2(tau_hi / tau_lo), the host's
+  std::vector<float> params;
+  std::uint32_t inputs() const { return levels * 2 + 1; }
+};
+
 // The T-infinity field of one frame, flattened (R1-BKD-070; the host builds it from the
 // reference's FieldFrame). Nodes of every level in one table, level l's node id at global index
 // level_offset[l] + id.
@@ -373,6 +386,8 @@ struct FieldData {
   double tau_cam = 0, t_far = 0, kappa = 0, cutoff = 0, theta = 0, stop = 0;
   std::uint64_t seed = 0;  // the jitter's counter-based seed (the scene's)
   bool enabled = true;     // the view draws the field
+  // The frame is drawn with this neural field (R1-NRF-031: a pure T-infinity frame) when set.
+  const NeuralData* neural = nullptr;
 };
 
 // The T3 splats of one frame in depth order, binned into 16-pixel tiles.
@@ -394,14 +409,27 @@ class CompositePass {
   // reference's within 1e-6.
   static constexpr std::uint32_t kMaxCandidates = 64;
   static Result<CompositePass> build(Context& ctx, const ExpConstants& constants, std::uint32_t max_candidates = kMaxCandidates);
+  // Whether a neural field of this architecture is inferred on the device (R1-BKD-076): its
+  // loops stay below lavapipe's limit (R1-BKD-073) and its layers fit the shader's arrays.
+  static bool infers(const NeuralData& n);
+  // The samples the last draw inferred the neural field at: every sample a candidate reaches,
+  // also those past the march's early end, which the host never evaluates.
+  std::uint64_t inferred() const { return inferred_; }
+  // The network's raw outputs (7 floats each) at `queries` (x, y, z, sigma each): the inference
+  // pass alone, as the frame runs it.
+  Result<std::vector<float>> infer(const NeuralData& n, std::span<const double> queries);
   Status draw(const ImpostorCamera& camera, const FieldData& field, const SplatData& splats, std::span<const double> opaque,
               std::span<float> rgba, std::vector<float>& flow, std::vector<std::uint32_t>& host_pixels);
 
  private:
   Context* ctx_ = nullptr;
   ExpConstants exp_;
-  std::uint32_t pipeline_ = 0;
-  std::array<std::uint32_t, 8> buffers_{};
+  // Checks the field, uploads its parameters (buffers 11..13) and returns the inference pass's
+  // push constants (the pixel count left 0).
+  Result<std::array<std::uint32_t, 12>> upload_neural(const NeuralData& n, std::uint32_t slots);
+  std::uint32_t pipeline_ = 0, infer_ = 0;
+  std::array<std::uint32_t, 14> buffers_{};
+  std::uint64_t inferred_ = 0;
 };
 
 }  // namespace r1::vk
