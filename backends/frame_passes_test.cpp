@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
+#include <optional>
 #include <random>
 
 #include "adapters/vulkan_adapters.hpp"
@@ -202,6 +203,12 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
   }
   auto pass = vk::CullPass::build(*ctx);
   ASSERT_TRUE(pass.is_ok()) << pass.status().message();
+  std::optional<vk::ImpostorPass> raster;
+  if (ctx->info().graphics) {
+    auto r = vk::ImpostorPass::build(*ctx, vk::ImpostorPass::Mode::kRaster);
+    ASSERT_TRUE(r.is_ok()) << r.status().message();
+    raster = std::move(r).value();
+  }
   const bool cpu = ctx->info().cpu;
   GenParams gp;
   gp.kind = GenKind::kBa;
@@ -227,7 +234,7 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
   away.camera.orientation = *render::look_at(away.camera.position, away.camera.position + render::Vec3{0, 0, 1}, {0, 1, 0});
   views.push_back(away);
   std::array<std::size_t, 5> tiers{};
-  std::size_t far_nodes = 0, culled = 0, near_plane = 0;
+  std::size_t far_nodes = 0, culled = 0, near_plane = 0, impostor_hits = 0;
   for (std::size_t i = 0; i < views.size(); ++i) {
     SCOPED_TRACE("view " + std::to_string(i));
     const render::View& v = views[i];
@@ -265,6 +272,25 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
     EXPECT_EQ(got_stats.nodes_culled, want_stats.nodes_culled);
     EXPECT_EQ(got_stats.particles_tested, want_stats.particles_tested);
     far_nodes += want.far.size(), culled += want_stats.nodes_culled;
+    // The impostor draw fed by these records (R1-BKD-077) against the reference's impostor pass:
+    // the raster rule (owners on all but 1e-3 of the pixels, the same bits where they agree).
+    if (raster) {
+      const std::vector<render::Impostor> list = render::impostor_list(scene, v, f, want);
+      double far = 1;
+      for (const render::Impostor& im : list) far = std::max(far, render::length(im.center - v.camera.position) + im.radius);
+      render::OpaqueLayer ref(v.width, v.height), dev(v.width, v.height);
+      render::draw_impostors(list, v, f, ref);
+      const vk::ImpostorCamera cam{v.camera.position, f.right, f.up, f.forward, f.focal_px,
+                                   static_cast<std::uint32_t>(v.width), static_cast<std::uint32_t>(v.height)};
+      ASSERT_TRUE(raster->draw_culled(cam, *pass, far, dev.t, dev.color, dev.owner).is_ok());
+      const Compared d = compare(ref, dev, list);
+      impostor_hits += d.hits;
+      EXPECT_LE(static_cast<double>(d.owner_differs), 1e-3 * static_cast<double>(d.pixels));
+      if (cpu) {
+        EXPECT_EQ(d.bits_differ, 0u);
+      }
+      EXPECT_LE(d.max_t_rel, cpu ? 1e-13 : 1e-9);
+    }
     // The indirect-draw records on the device: a quad per instance, each tier's visible count,
     // the tiers' lists one after another, each the tier's particles ascending.
     auto args = ctx->buffer_read(pass->args_buffer(), 0, 5 * sizeof(vk::DrawArgs));
@@ -292,6 +318,31 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
   EXPECT_GT(near_plane, 0u);
   EXPECT_GT(far_nodes, 0u);
   EXPECT_GT(culled, 0u);
+  if (raster) {
+    EXPECT_GT(impostor_hits, 5000u);
+  }
+  // The pass holds the scene under its serial: a second scene (another epoch) replaces it.
+  EXPECT_EQ(pass->serial(), scene.serial);
+  GenParams gp2;
+  gp2.kind = GenKind::kBa;
+  gp2.n = 400;
+  auto snap2 = generate(gp2);
+  auto graph2 = build_graph(*snap2);
+  auto epoch2 = run_epoch(*snap2, *graph2, {});
+  ASSERT_TRUE(epoch2.is_ok());
+  const render::Scene other = render::make_scene(*epoch2);
+  ASSERT_NE(other.serial, scene.serial);
+  {
+    const render::View& v = views[7];
+    const render::CameraFrame f = render::camera_frame(v);
+    render::CullStats a, b;
+    const render::CullResult want = render::cull_frame(other, v, f, &a);
+    render::CullResult got;
+    ASSERT_TRUE(backends::cull_on_device(*pass, other, v, f, got, b).is_ok());
+    EXPECT_EQ(pass->serial(), other.serial);
+    ASSERT_EQ(got.visible.size(), want.visible.size());
+    for (std::size_t k = 0; k < want.visible.size(); ++k) ASSERT_EQ(got.visible[k].particle, want.visible[k].particle);
+  }
   // A scene the pass is not given right is refused, not guessed at.
   vk::CullScene bad;
   const std::vector<double> radius(3, 1.0), position(6, 0.0);

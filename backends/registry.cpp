@@ -33,7 +33,7 @@ const std::vector<BackendInfo>& registered_backends() {
                  [] { return make_cpu_backend(); }});
 #endif
 #if R1_BACKEND_VULKAN
-    v.push_back({"vulkan", "cull, impostors, edge tubes, splat sort, field and composite, the spectral and focus kernels on a Vulkan 1.3 device (lavapipe in CI), the rest on the host (R1-BKD-065)", true,
+    v.push_back({"vulkan", "cull, impostors, edge tubes, splat sort, field and composite with neural inference, the spectral and focus kernels on a Vulkan 1.3 device (lavapipe in CI), the rest on the host (R1-BKD-065)", true,
                  [] { return make_vulkan_backend(); }});
 #endif
 #if R1_BACKEND_FP64

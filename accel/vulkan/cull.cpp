@@ -131,8 +131,7 @@ void main() {
 // One invocation a particle: 0 untested (its leaf is not open), 1 tested and not visible, 2 + tier.
 constexpr const char* kMark = R"(
 layout(std430, binding = 2) readonly buffer S { uint state[]; };
-layout(std430, binding = 3) readonly buffer X { double pos[]; };
-layout(std430, binding = 4) readonly buffer R { double rad[]; };
+layout(std430, binding = 3) readonly buffer X { double geo[]; };
 layout(std430, binding = 5) readonly buffer L { uint leaf[]; };
 layout(std430, binding = 6) writeonly buffer C { uint code[]; };
 void main() {
@@ -141,8 +140,8 @@ void main() {
   uint lf = leaf[q];
   uint c = 0u;
   if (lf != 0xffffffffu && state[lf] == 1u) {
-    dvec3 x = dvec3(pos[3u * q], pos[3u * q + 1u], pos[3u * q + 2u]);
-    double r = rad[q];
+    dvec3 x = dvec3(geo[8u * q], geo[8u * q + 1u], geo[8u * q + 2u]);
+    double r = geo[8u * q + 3u];
     c = 1u;
     if (sphere_visible(x, r)) {
       double depth, s;
@@ -214,8 +213,7 @@ constexpr const char* kScatter = R"(
 layout(std430, binding = 0) writeonly buffer O { uint rec[]; };
 layout(std430, binding = 1) readonly buffer K { uint counts[]; };
 layout(std430, binding = 2) readonly buffer A { uint args[]; };
-layout(std430, binding = 3) readonly buffer X { double pos[]; };
-layout(std430, binding = 4) readonly buffer R { double rad[]; };
+layout(std430, binding = 3) readonly buffer X { double geo[]; };
 layout(std430, binding = 5) writeonly buffer T { uint lists[]; };
 layout(std430, binding = 6) readonly buffer C { uint code[]; };
 void main() {
@@ -229,7 +227,7 @@ void main() {
     uint k = code[e];
     if (k < 2u) continue;
     double depth, s;
-    uint t = classify(dvec3(pos[3u * e], pos[3u * e + 1u], pos[3u * e + 2u]), rad[e], depth, s);
+    uint t = classify(dvec3(geo[8u * e], geo[8u * e + 1u], geo[8u * e + 2u]), geo[8u * e + 3u], depth, s);
     uvec2 dw = unpackDouble2x32(depth), sw = unpackDouble2x32(s);
     uint o = next * 8u;
     rec[o] = e;
@@ -286,44 +284,81 @@ Result<CullPass> CullPass::build(Context& ctx) {
 
 bool CullPass::fits(std::size_t particles, std::size_t nodes) const {
   const std::size_t range = ctx_->info().max_buffer;
-  return particles <= kMaxParticles && particles * 32 <= range && nodes * 64 <= range;
+  return particles <= kMaxParticles && particles * 64 <= range && nodes * 64 <= range;
 }
 
 Result<CullOutput> CullPass::run(const CullScene& scene, const CullView& view, bool read_tier_lists) {
   Context& ctx = *ctx_;
-  const std::size_t n = scene.radius.size();
-  if (scene.position.size() != 3 * n || scene.leaf.size() != n)
-    return Status::input("vulkan cull: positions, radii and leaves of different particle counts");
-  std::array<std::uint32_t, kLevels + 1> offset{};
-  for (int l = 0; l < kLevels; ++l) {
-    const auto L = static_cast<std::size_t>(l);
-    if (scene.node[L].size() % 8 != 0) return Status::input("vulkan cull: level " + std::to_string(l) + "'s nodes are not 8 doubles each");
-    const std::size_t count = scene.node[L].size() / 8;
-    if (l + 1 < kLevels && scene.parent[L].size() != count)
-      return Status::input("vulkan cull: level " + std::to_string(l) + " has " + std::to_string(count) + " nodes and " +
-                           std::to_string(scene.parent[L].size()) + " parents");
-    offset[L + 1] = offset[L] + static_cast<std::uint32_t>(count);
-  }
-  const std::uint32_t total = offset[kLevels];
-  if (!fits(n, total))
-    return Status::input("vulkan cull: " + std::to_string(n) + " particles and " + std::to_string(total) +
-                         " nodes pass the device's storage range of " + std::to_string(ctx.info().max_buffer) + " bytes");
-  std::vector<double> nodes;
-  nodes.reserve(std::size_t{total} * 8);
-  std::vector<std::uint32_t> parents(total, kNone);
-  for (int l = 0; l < kLevels; ++l) {
-    const auto L = static_cast<std::size_t>(l);
-    nodes.insert(nodes.end(), scene.node[L].begin(), scene.node[L].end());
-    if (l + 1 == kLevels) continue;
-    for (std::size_t i = 0; i < scene.parent[L].size(); ++i) {
-      const std::uint32_t q = scene.parent[L][i];
-      if (q >= offset[L + 2] - offset[L + 1])
-        return Status::input("vulkan cull: node " + std::to_string(i) + " of level " + std::to_string(l) + " has no parent");
-      parents[offset[L] + i] = offset[L + 1] + q;
+  auto& b = buffers_;
+  const auto ensure = [&ctx](std::uint32_t& id, std::size_t bytes) { return ctx.buffer_ensure(id, std::max<std::size_t>(bytes, 16)); };
+  if (scene.serial == 0 || scene.serial != serial_) {
+    // A new scene: checked, flattened and uploaded once, kept under its serial.
+    serial_ = 0;
+    const std::size_t n = scene.radius.size();
+    if (scene.position.size() != 3 * n || scene.leaf.size() != n)
+      return Status::input("vulkan cull: positions, radii and leaves of different particle counts");
+    const bool impostors = !scene.color.empty() || !scene.shape.empty();
+    if (impostors && (scene.color.size() != 3 * n || scene.shape.size() != n))
+      return Status::input("vulkan cull: colours and shapes of different particle counts");
+    std::array<std::uint32_t, kLevels + 1> offset{};
+    for (int l = 0; l < kLevels; ++l) {
+      const auto L = static_cast<std::size_t>(l);
+      if (scene.node[L].size() % 8 != 0) return Status::input("vulkan cull: level " + std::to_string(l) + "'s nodes are not 8 doubles each");
+      const std::size_t count = scene.node[L].size() / 8;
+      if (l + 1 < kLevels && scene.parent[L].size() != count)
+        return Status::input("vulkan cull: level " + std::to_string(l) + " has " + std::to_string(count) + " nodes and " +
+                             std::to_string(scene.parent[L].size()) + " parents");
+      offset[L + 1] = offset[L] + static_cast<std::uint32_t>(count);
     }
+    const std::uint32_t total = offset[kLevels];
+    if (!fits(n, total))
+      return Status::input("vulkan cull: " + std::to_string(n) + " particles and " + std::to_string(total) +
+                           " nodes pass the device's storage range of " + std::to_string(ctx.info().max_buffer) + " bytes");
+    std::vector<double> nodes;
+    nodes.reserve(std::size_t{total} * 8);
+    std::vector<std::uint32_t> parents(total, kNone);
+    for (int l = 0; l < kLevels; ++l) {
+      const auto L = static_cast<std::size_t>(l);
+      nodes.insert(nodes.end(), scene.node[L].begin(), scene.node[L].end());
+      if (l + 1 == kLevels) continue;
+      for (std::size_t i = 0; i < scene.parent[L].size(); ++i) {
+        const std::uint32_t q = scene.parent[L][i];
+        if (q >= offset[L + 2] - offset[L + 1])
+          return Status::input("vulkan cull: node " + std::to_string(i) + " of level " + std::to_string(l) + " has no parent");
+        parents[offset[L] + i] = offset[L + 1] + q;
+      }
+    }
+    for (const std::uint32_t lf : scene.leaf)
+      if (lf != kNone && lf >= offset[1]) return Status::input("vulkan cull: a particle's leaf is no level-0 node");
+    std::vector<double> geo(n * 8, 0.0);
+    std::vector<std::int32_t> meta(n * 8, 0);
+    for (std::size_t q = 0; q < n; ++q) {
+      std::copy(scene.position.begin() + static_cast<std::ptrdiff_t>(3 * q), scene.position.begin() + static_cast<std::ptrdiff_t>(3 * q + 3),
+                geo.begin() + static_cast<std::ptrdiff_t>(8 * q));
+      geo[8 * q + 3] = scene.radius[q];
+      meta[8 * q + 4] = static_cast<std::int32_t>(q);
+      if (!impostors) continue;
+      std::copy(scene.color.begin() + static_cast<std::ptrdiff_t>(3 * q), scene.color.begin() + static_cast<std::ptrdiff_t>(3 * q + 3),
+                geo.begin() + static_cast<std::ptrdiff_t>(8 * q + 4));
+      meta[8 * q + 5] = static_cast<std::int32_t>(scene.shape[q]);
+    }
+    R1_TRY(ensure(b[kNodes], nodes.size() * 8));
+    R1_TRY(ensure(b[kParents], parents.size() * 4));
+    R1_TRY(ensure(b[kState], std::size_t{total} * 4));
+    R1_TRY(ensure(b[kGeometry], n * 64));
+    R1_TRY(ensure(b[kMeta], n * 32));
+    R1_TRY(ensure(b[kLeaf], n * 4));
+    R1_TRY(ensure(b[kCode], n * 4));
+    R1_TRY(ctx.buffer_write(b[kNodes], detail::bytes_of(std::span<const double>(nodes)), 0));
+    R1_TRY(ctx.buffer_write(b[kParents], detail::bytes_of(std::span<const std::uint32_t>(parents)), 0));
+    R1_TRY(ctx.buffer_write(b[kGeometry], detail::bytes_of(std::span<const double>(geo)), 0));
+    R1_TRY(ctx.buffer_write(b[kMeta], detail::bytes_of(std::span<const std::int32_t>(meta)), 0));
+    R1_TRY(ctx.buffer_write(b[kLeaf], detail::bytes_of(scene.leaf), 0));
+    n_ = n, offset_ = offset, impostors_ = impostors, serial_ = scene.serial;
   }
-  for (const std::uint32_t lf : scene.leaf)
-    if (lf != kNone && lf >= offset[1]) return Status::input("vulkan cull: a particle's leaf is no level-0 node");
+  const std::size_t n = n_;
+  const std::array<std::uint32_t, kLevels + 1>& offset = offset_;
+  const std::uint32_t total = offset[kLevels];
   std::vector<double> params(36, 0.0);
   for (std::size_t k = 0; k < 5; ++k) {
     params[4 * k] = view.normal[k].x, params[4 * k + 1] = view.normal[k].y, params[4 * k + 2] = view.normal[k].z;
@@ -335,28 +370,15 @@ Result<CullOutput> CullPass::run(const CullScene& scene, const CullView& view, b
   std::copy(std::begin(fixed), std::end(fixed), params.begin() + 20);
 
   CullOutput out;
+  last_args_ = {};
   for (int l = 0; l < kLevels; ++l) out.state[static_cast<std::size_t>(l)].assign(offset[static_cast<std::size_t>(l) + 1] - offset[static_cast<std::size_t>(l)], 0);
   for (DrawArgs& a : out.args) a.vertex_count = 6;
   if (n == 0 && total == 0) return out;
 
   const auto blocks = static_cast<std::uint32_t>((n + kBlock - 1) / kBlock);
-  auto& b = buffers_;
-  const auto ensure = [&ctx](std::uint32_t& id, std::size_t bytes) { return ctx.buffer_ensure(id, std::max<std::size_t>(bytes, 16)); };
-  R1_TRY(ensure(b[kNodes], nodes.size() * 8));
-  R1_TRY(ensure(b[kParents], parents.size() * 4));
-  R1_TRY(ensure(b[kState], std::size_t{total} * 4));
-  R1_TRY(ensure(b[kPosition], n * 24));
-  R1_TRY(ensure(b[kRadius], n * 8));
-  R1_TRY(ensure(b[kLeaf], n * 4));
-  R1_TRY(ensure(b[kCode], n * 4));
   R1_TRY(ensure(b[kParams], params.size() * 8));
   R1_TRY(ensure(b[kCounts], (std::size_t{blocks} + 1) * kColumns * 4));
   R1_TRY(ensure(b[kArgs], 5 * sizeof(DrawArgs)));
-  R1_TRY(ctx.buffer_write(b[kNodes], detail::bytes_of(std::span<const double>(nodes)), 0));
-  R1_TRY(ctx.buffer_write(b[kParents], detail::bytes_of(std::span<const std::uint32_t>(parents)), 0));
-  R1_TRY(ctx.buffer_write(b[kPosition], detail::bytes_of(scene.position), 0));
-  R1_TRY(ctx.buffer_write(b[kRadius], detail::bytes_of(scene.radius), 0));
-  R1_TRY(ctx.buffer_write(b[kLeaf], detail::bytes_of(scene.leaf), 0));
   R1_TRY(ctx.buffer_write(b[kParams], detail::bytes_of(std::span<const double>(params)), 0));
 
   Push push;
@@ -380,7 +402,7 @@ Result<CullOutput> CullPass::run(const CullScene& scene, const CullView& view, b
   }
   if (n == 0) return out;
   {
-    const Slot slots[] = {{2, b[kState]}, {3, b[kPosition]}, {4, b[kRadius]}, {5, b[kLeaf]}, {6, b[kCode]}, prm};
+    const Slot slots[] = {{2, b[kState]}, {3, b[kGeometry]}, {5, b[kLeaf]}, {6, b[kCode]}, prm};
     R1_TRY(ctx.dispatch(mark_, slots, detail::groups_for(n), push_bytes(push)));
   }
   {
@@ -392,12 +414,13 @@ Result<CullOutput> CullPass::run(const CullScene& scene, const CullView& view, b
   }
   R1_ASSIGN(const auto args, ctx.buffer_read(b[kArgs], 0, 5 * sizeof(DrawArgs)));
   std::memcpy(out.args.data(), args.data(), args.size());
+  last_args_ = out.args;
   std::size_t visible = 0;
   for (const DrawArgs& a : out.args) visible += a.instance_count;
   R1_TRY(ensure(b[kOut], visible * 32));
   R1_TRY(ensure(b[kLists], visible * 4));
   {
-    const Slot slots[] = {{0, b[kOut]}, {1, b[kCounts]}, {2, b[kArgs]}, {3, b[kPosition]}, {4, b[kRadius]}, {5, b[kLists]}, {6, b[kCode]}, prm};
+    const Slot slots[] = {{0, b[kOut]}, {1, b[kCounts]}, {2, b[kArgs]}, {3, b[kGeometry]}, {5, b[kLists]}, {6, b[kCode]}, prm};
     R1_TRY(ctx.dispatch(scatter_, slots, detail::groups_for(blocks), push_bytes(push)));
   }
   if (visible == 0) return out;

@@ -63,6 +63,48 @@ void main() {
 }
 )";
 
+// The draw fed by the cull (R1-BKD-077): the instance is a particle of a tier list, and the quad
+// is its bounding cube's pixel rectangle, project_box (reference/render/cull.cpp) in fp64.
+constexpr const char* kVertexCulled = R"(
+layout(location = 0) flat out uint item;
+const double kNearPlane = 1e-3LF;
+void main() {
+  uint i = instance_item[gl_InstanceIndex];
+  int v = gl_VertexIndex;
+  dvec3 c = dvec3(geo[i * 8u], geo[i * 8u + 1u], geo[i * 8u + 2u]);
+  double r = geo[i * 8u + 3u];
+  precise dvec3 lo = dvec3(c.x - r, c.y - r, c.z - r);
+  precise dvec3 hi = dvec3(c.x + r, c.y + r, c.z + r);
+  dvec3 pos = dvec3(cam[0], cam[1], cam[2]), right = dvec3(cam[3], cam[4], cam[5]), up = dvec3(cam[6], cam[7], cam[8]);
+  dvec3 fwd = dvec3(cam[9], cam[10], cam[11]);
+  double focal = cam[12];
+  double w = double(p.width), h = double(p.height);
+  double minx = 0.0LF, miny = 0.0LF, maxx = 0.0LF, maxy = 0.0LF;
+  bool whole = false;
+  for (int k = 0; k < 8; ++k) {
+    dvec3 corner = dvec3((k & 1) != 0 ? hi.x : lo.x, (k & 2) != 0 ? hi.y : lo.y, (k & 4) != 0 ? hi.z : lo.z);
+    precise dvec3 rel = corner - pos;
+    precise double depth = rel.x * fwd.x + rel.y * fwd.y + rel.z * fwd.z;
+    if (depth <= kNearPlane) { whole = true; break; }
+    precise double px = w * 0.5LF + (rel.x * right.x + rel.y * right.y + rel.z * right.z) / depth * focal;
+    precise double py = h * 0.5LF - (rel.x * up.x + rel.y * up.y + rel.z * up.z) / depth * focal;
+    minx = k == 0 ? px : min(minx, px); maxx = k == 0 ? px : max(maxx, px);
+    miny = k == 0 ? py : min(miny, py); maxy = k == 0 ? py : max(maxy, py);
+  }
+  double x0 = 0.0LF, y0 = 0.0LF, x1 = w, y1 = h;
+  if (!whole) {
+    x0 = clamp(floor(minx), 0.0LF, w); y0 = clamp(floor(miny), 0.0LF, h);
+    x1 = clamp(ceil(maxx) + 1.0LF, 0.0LF, w); y1 = clamp(ceil(maxy) + 1.0LF, 0.0LF, h);
+  }
+  bool right_side = v == 1 || v == 3 || v == 4;
+  bool below = v == 2 || v == 4 || v == 5;
+  float x = float(int(right_side ? x1 : x0));
+  float y = float(int(below ? y1 : y0));
+  gl_Position = vec4(2.0 * x / float(p.width) - 1.0, 2.0 * y / float(p.height) - 1.0, 0.0, 1.0);
+  item = i;
+}
+)";
+
 constexpr const char* kFragmentMain = R"(
 layout(location = 0) flat in uint item;
 layout(location = 0) out uvec4 out0;
@@ -386,8 +428,9 @@ Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
   if (mode == Mode::kCompute) {
     R1_ASSIGN(pass.pipeline_, ctx.compute_compile(std::string(kComputeHeader) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kShapes + kComputeMain, "impostors"));
   } else {
-    R1_ASSIGN(pass.pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexMain,
-                                                   std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kShapes + kFragmentMain, "impostors"));
+    const std::string fragment = std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kShapes + kFragmentMain;
+    R1_ASSIGN(pass.pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexMain, fragment, "impostors"));
+    R1_ASSIGN(pass.culled_pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexCulled, fragment, "impostors_culled"));
   }
   return pass;
 }
@@ -492,6 +535,33 @@ Status ImpostorPass::draw_raster(const ImpostorCamera& cam, std::span<const Impo
     const Vec3 r = it.center - cam.position;
     far = std::max(far, std::sqrt(r.x * r.x + r.y * r.y + r.z * r.z) + it.radius);
   }
+  const Slot slots[] = {{0, buffers_[0]}, {1, buffers_[1]}, {2, buffers_[2]}, {7, buffers_[7]}};
+  return raster(pipeline_, slots, buffers_[3], 1, far, cam, t, color, owner);
+}
+
+Status ImpostorPass::draw_culled(const ImpostorCamera& cam, const CullPass& cull, double far, std::span<double> t,
+                                 std::span<Vec3> color, std::span<std::int64_t> owner) {
+  if (mode_ != Mode::kRaster) return Status::input("vulkan impostors: the draw fed by the cull is a raster draw");
+  if (!cull.holds_impostors()) return Status::input("vulkan impostors: the cull holds no colours and shapes to draw");
+  const std::size_t pixels = std::size_t{cam.width} * cam.height;
+  if (cam.width == 0 || cam.height == 0 || t.size() != pixels || color.size() != pixels || owner.size() != pixels)
+    return Status::input("vulkan impostors: the layer is not " + std::to_string(cam.width) + " x " + std::to_string(cam.height));
+  std::fill(t.begin(), t.end(), std::numeric_limits<double>::infinity());
+  std::fill(color.begin(), color.end(), Vec3{});
+  std::fill(owner.begin(), owner.end(), -1);
+  const auto& args = cull.last_args();
+  if (args[0].instance_count + args[1].instance_count + args[2].instance_count == 0) return Status::ok();
+  const double camera[16] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z,
+                             cam.up.x,       cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z,
+                             cam.focal_px,   0,              0,              0};
+  R1_TRY(upload(7, detail::bytes_of(std::span<const double>(camera))));
+  // The T0, T1 and T2 records of the cull: three draws over its tier lists.
+  const Slot slots[] = {{0, cull.geometry_buffer()}, {1, cull.meta_buffer()}, {2, cull.tier_list_buffer()}, {7, buffers_[7]}};
+  return raster(culled_pipeline_, slots, cull.args_buffer(), 3, far, cam, t, color, owner);
+}
+
+Status ImpostorPass::raster(std::uint32_t pipeline, std::span<const Slot> slots, std::uint32_t indirect, std::uint32_t draws, double far,
+                            const ImpostorCamera& cam, std::span<double> t, std::span<Vec3> color, std::span<std::int64_t> owner) {
   const float depth_scale = static_cast<float>(0.5 / (far * 1.0001));
   if (target_ == kNoTarget || target_size_ != std::array<std::uint32_t, 2>{cam.width, cam.height}) {
     if (target_ != kNoTarget) ctx_->target_release(target_);
@@ -503,10 +573,9 @@ Status ImpostorPass::draw_raster(const ImpostorCamera& cam, std::span<const Impo
   std::memcpy(&push_words[2], &depth_scale, 4);
   std::uint8_t push_bytes[sizeof push_words];
   std::memcpy(push_bytes, push_words, sizeof push_words);
-  const Slot slots[] = {{0, buffers_[0]}, {1, buffers_[1]}, {2, buffers_[2]}, {7, buffers_[7]}};
   // Cleared: t = +infinity, owner -1, colour 0.
   const Context::Clear clear{{{0u, 0x7ff00000u, 0xffffffffu, 0u}, {0u, 0u, 0u, 0u}, {0u, 0u, 0u, 0u}}};
-  R1_TRY(ctx_->draw_indirect(pipeline_, target_, slots, buffers_[3], 1, clear, push_bytes));
+  R1_TRY(ctx_->draw_indirect(pipeline, target_, slots, indirect, draws, clear, push_bytes));
   std::array<std::vector<std::uint32_t>, Context::kTargetColors> words;
   for (std::uint32_t i = 0; i < Context::kTargetColors; ++i) {
     R1_ASSIGN(words[i], ctx_->target_read(target_, i));

@@ -16,6 +16,7 @@
 #include "r1/accel/vulkan_panel.hpp"
 #include "vulkan_adapters.hpp"
 #include "vulkan_passes.hpp"
+#include "render/content_pass.hpp"
 #if R1_BACKEND_CPU
 #include "r1/accel/cpu/panel_kernels.hpp"
 #endif
@@ -61,6 +62,10 @@ ExactProductFactory device_products(std::shared_ptr<vk::Context> ctx) {
 struct PassState {
   std::shared_ptr<vk::Context> ctx;
   vk::CullPass cull;
+  // Set by the frame's cull when it ran on the device and the impostor draw may read its records
+  // (R1-BKD-077), with the bound on the hits' ray parameter; the impostor pass clears it.
+  bool cull_feeds_impostors = false;
+  double impostor_far = 1;
   vk::EdgePass edges;
   vk::DepthSort splat_sort;
   vk::ImpostorPass impostors;
@@ -79,6 +84,8 @@ vk::ImpostorCamera camera_of(const render::View& v, const render::CameraFrame& f
 Status draw_on_device(PassState& st, std::span<const render::Impostor> list, const render::View& v, const render::CameraFrame& f,
                       render::OpaqueLayer& layer) {
   const vk::ImpostorCamera cam = camera_of(v, f);
+  if (std::exchange(st.cull_feeds_impostors, false) && st.impostors.mode() == vk::ImpostorPass::Mode::kRaster)
+    return st.impostors.draw_culled(cam, st.cull, st.impostor_far, layer.t, layer.color, layer.owner);
   std::vector<vk::ImpostorItem> items(list.size());
   for (std::size_t i = 0; i < list.size(); ++i) {
     const render::Impostor& im = list[i];
@@ -89,14 +96,13 @@ Status draw_on_device(PassState& st, std::span<const render::Impostor> list, con
 
 }  // namespace
 
-Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::View& v, const render::CameraFrame& f,
-                      render::CullResult& out, render::CullStats& stats) {
-  // The scene flattened: node boxes with their largest member radius, parents from the children
-  // lists (the walk's own links), positions, radii and each particle's level-0 node.
+namespace {
+
+// The scene as vk::CullPass reads it (R1-BKD-074, 077).
+void flatten_scene(const render::Scene& s, std::array<std::vector<double>, kLevels>& node,
+                   std::array<std::vector<std::uint32_t>, kLevels>& parent, std::vector<double>& position, std::vector<double>& color,
+                   std::vector<std::uint32_t>& leaf, vk::CullScene& scene) {
   constexpr std::uint32_t kNone = 0xffffffffu;
-  std::array<std::vector<double>, kLevels> node;
-  std::array<std::vector<std::uint32_t>, kLevels> parent;
-  vk::CullScene scene;
   for (int l = 0; l < kLevels; ++l) {
     const auto L = static_cast<std::size_t>(l);
     for (const render::NodeData& d : s.nodes[L]) {
@@ -109,15 +115,35 @@ Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::
         for (const std::uint32_t c : s.hierarchy->levels[L][id].children) parent[L - 1][c] = id;
     }
   }
-  std::vector<double> position(std::size_t{s.n} * 3);
-  std::vector<std::uint32_t> leaf(s.n, kNone);
-  for (std::uint32_t p = 0; p < s.n; ++p)
-    position[std::size_t{p} * 3] = s.position[p].x, position[std::size_t{p} * 3 + 1] = s.position[p].y,
-                            position[std::size_t{p} * 3 + 2] = s.position[p].z;
+  position.resize(std::size_t{s.n} * 3);
+  color.resize(std::size_t{s.n} * 3);
+  leaf.assign(s.n, kNone);
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    const std::size_t k = std::size_t{p} * 3;
+    position[k] = s.position[p].x, position[k + 1] = s.position[p].y, position[k + 2] = s.position[p].z;
+    color[k] = s.color[p].x, color[k + 1] = s.color[p].y, color[k + 2] = s.color[p].z;
+  }
   for (std::uint32_t id = 0; id < s.nodes[0].size(); ++id)
     for (const std::uint32_t p : s.hierarchy->levels[0][id].children) leaf[p] = id;
   for (std::size_t l = 0; l < kLevels; ++l) scene.node[l] = node[l], scene.parent[l] = parent[l];
   scene.position = position, scene.radius = s.radius, scene.leaf = leaf;
+  scene.color = color, scene.shape = s.shape;
+}
+
+}  // namespace
+
+Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::View& v, const render::CameraFrame& f,
+                      render::CullResult& out, render::CullStats& stats) {
+  // The scene flattened, once per scene (the pass keeps it under its serial): node boxes with
+  // their largest member radius, parents from the children lists (the walk's own links),
+  // positions, radii, colours, shapes and each particle's level-0 node.
+  std::array<std::vector<double>, kLevels> node;
+  std::array<std::vector<std::uint32_t>, kLevels> parent;
+  std::vector<double> position, color;
+  std::vector<std::uint32_t> leaf;
+  vk::CullScene scene;
+  scene.serial = s.serial;
+  if (s.serial == 0 || pass.serial() != s.serial) flatten_scene(s, node, parent, position, color, leaf, scene);
   const render::Frustum fr = render::make_frustum(v, f);
   vk::CullView view;
   view.normal = fr.normal, view.offset = fr.offset;
@@ -375,11 +401,25 @@ std::unique_ptr<Backend> make_vulkan_backend() {
                           render::CullStats& stats) -> Status {
       std::size_t nodes = 0;
       for (const auto& level : s.nodes) nodes += level.size();
+      state->cull_feeds_impostors = false;
       if (!state->cull.fits(s.n, nodes)) {
         out = render::cull_frame(s, v, f, &stats);
         return Status::ok();
       }
-      return cull_on_device(state->cull, s, v, f, out, stats);
+      R1_TRY(cull_on_device(state->cull, s, v, f, out, stats));
+      // The impostor draw reads the cull's T0..T2 records unless a T0 particle opens into content
+      // (the content pass draws it; the host's list leaves it out). Its depth scale bounds every
+      // hit by the drawn particles' bounding spheres, as the list's draw does.
+      bool opens = false;
+      double far = 1;
+      for (const render::Visible& vis : out.visible) {
+        if (vis.tier > render::Tier::kT2) continue;
+        opens = opens || (vis.tier == render::Tier::kT0 && s.content != nullptr && s.content->has(vis.particle));
+        far = std::max(far, render::length(s.position[vis.particle] - v.camera.position) + s.radius[vis.particle]);
+      }
+      state->cull_feeds_impostors = !opens && state->cull.holds_impostors();
+      state->impostor_far = far;
+      return Status::ok();
     };
   if (edges_on_the_device)
     passes.edges = [state](std::span<const render::EdgeTube> tubes, const render::View& v, const render::CameraFrame& f,

@@ -2,6 +2,7 @@
 #include "scene.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "image.hpp"
@@ -11,7 +12,9 @@ namespace r1::render {
 double brightness(double n_phi) { return std::clamp(std::sqrt(std::sqrt(std::max(n_phi, 0.0))), 0.6, 3.0); }
 
 Scene make_scene(const Epoch& e) {
+  static std::atomic<std::uint64_t> serials{0};
   Scene s;
+  s.serial = ++serials;
   s.n = static_cast<std::uint32_t>(e.ids.size());
   const double n = s.n;
   s.position.resize(s.n);

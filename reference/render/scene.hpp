@@ -27,6 +27,10 @@ struct NeuralField;
 struct ContentScene;
 
 struct Scene {
+  // A number no other make_scene of this process returns: a backend may keep device copies of a
+  // scene's particles and hierarchy under it (R1-RND-016). Code that changes a scene's positions,
+  // radii, colours, shapes or hierarchy after make_scene sets it to 0 (no copies kept).
+  std::uint64_t serial = 0;
   std::uint32_t n = 0;
   std::vector<Vec3> position;      // X'(p) in scene units
   std::vector<double> radius;      // r(p), scene units

@@ -193,6 +193,9 @@ class DepthSort {
 // The frame's cull on the device (R1-BKD-074; the reference's cull_frame, R1-RND-025, whose walk
 // it reproduces). The scene, flattened by the host:
 struct CullScene {
+  // Names the scene (render::Scene::serial): a run with the serial of the scene the pass holds
+  // keeps it on the device and reads nothing below; 0 uploads every time.
+  std::uint64_t serial = 0;
   // Per level (0 finest .. kLevels - 1), 8 doubles a node: the box's lo and hi, the largest member
   // radius, 0; and each node's parent (an id at the next level; not read at the top level).
   std::array<std::span<const double>, kLevels> node;
@@ -200,6 +203,10 @@ struct CullScene {
   std::span<const double> position;   // 3 doubles a particle
   std::span<const double> radius;
   std::span<const std::uint32_t> leaf;  // the level-0 node holding each particle (0xffffffff: none)
+  // What the impostor draw fed by the cull reads (ImpostorPass::draw_culled): colour (3 doubles a
+  // particle) and shape; may be empty when no such draw follows.
+  std::span<const double> color;
+  std::span<const Shape> shape;
 };
 // The frame's view as the cull reads it: the frustum's five inward planes (a point x is inside
 // plane k when dot(normal[k], x) + offset[k] >= 0), the camera, the near plane and the tiers.
@@ -236,7 +243,7 @@ struct CullOutput {
 class CullPass {
  public:
   // Particles one call takes at most: the scan then loops over at most 16,384 blocks (lavapipe's
-  // loop limit, R1-BKD-073).
+  // loop limit, R1-BKD-073); their geometry (64 bytes each) must also fit the storage range.
   static constexpr std::size_t kMaxParticles = std::size_t{1} << 22;
   static Result<CullPass> build(Context& ctx);
   // Whether a scene of this many particles and nodes (all levels) is within kMaxParticles and the
@@ -244,9 +251,16 @@ class CullPass {
   bool fits(std::size_t particles, std::size_t nodes) const;
   // Input error: more than kMaxParticles, inconsistent sizes, or a buffer past the device's range.
   Result<CullOutput> run(const CullScene& scene, const CullView& view, bool read_tier_lists = false);
-  // The buffers the last run left on the device: the indirect-draw records and the tier lists.
+  // The buffers the last run left on the device: the indirect-draw records, the tier lists, and
+  // the scene's particles as the impostor draw reads them (8 doubles each: centre, radius,
+  // colour, 0; 8 ints each: 0, 0, 0, 0, particle, shape, 0, 0), with the records read back.
   std::uint32_t args_buffer() const { return buffers_[kArgs]; }
   std::uint32_t tier_list_buffer() const { return buffers_[kLists]; }
+  std::uint32_t geometry_buffer() const { return buffers_[kGeometry]; }
+  std::uint32_t meta_buffer() const { return buffers_[kMeta]; }
+  const std::array<DrawArgs, 5>& last_args() const { return last_args_; }
+  std::uint64_t serial() const { return serial_; }  // the scene held (0: none)
+  bool holds_impostors() const { return impostors_; }  // the scene came with colours and shapes
 
   CullPass() = default;
   CullPass(CullPass&& o) noexcept { *this = std::move(o); }
@@ -256,10 +270,16 @@ class CullPass {
   ~CullPass();
 
  private:
-  enum : std::size_t { kNodes, kParents, kState, kPosition, kRadius, kLeaf, kCode, kParams, kCounts, kArgs, kLists, kOut, kBuffers };
+  enum : std::size_t { kNodes, kParents, kState, kGeometry, kMeta, kLeaf, kCode, kParams, kCounts, kArgs, kLists, kOut, kBuffers };
   Context* ctx_ = nullptr;
   std::uint32_t nodes_ = 0, mark_ = 0, count_ = 0, scan_ = 0, args_ = 0, scatter_ = 0;
   std::array<std::uint32_t, kBuffers> buffers_{};
+  // The scene on the device: its serial, particles and level offsets.
+  std::uint64_t serial_ = 0;
+  std::size_t n_ = 0;
+  std::array<std::uint32_t, kLevels + 1> offset_{};
+  bool impostors_ = false;
+  std::array<DrawArgs, 5> last_args_{};
 };
 
 // The pinhole camera of a frame as the impostor pass needs it (render::CameraFrame and the image
@@ -300,8 +320,17 @@ class ImpostorPass {
   Status draw(const ImpostorCamera& camera, std::span<const ImpostorItem> items, std::span<double> t,
               std::span<render::Vec3> color, std::span<std::int64_t> owner);
   Mode mode() const { return mode_; }
+  // The raster pass fed by the cull (R1-BKD-077): three indirect draws, the cull's T0, T1 and T2
+  // records over its tier lists and the scene's particles it holds, each quad its particle's
+  // bounding-cube rectangle found in the vertex shader. `far` bounds the ray parameter of every
+  // hit (the depth scale). For frames with no T0 particle that opens into content (R1-RND-130),
+  // whose impostor list is then the cull's T0..T2 particles with a non-empty rectangle.
+  Status draw_culled(const ImpostorCamera& camera, const CullPass& cull, double far, std::span<double> t,
+                     std::span<render::Vec3> color, std::span<std::int64_t> owner);
 
  private:
+  Status raster(std::uint32_t pipeline, std::span<const Slot> slots, std::uint32_t indirect, std::uint32_t draws, double far,
+                const ImpostorCamera& cam, std::span<double> t, std::span<render::Vec3> color, std::span<std::int64_t> owner);
   static constexpr std::uint32_t kNoTarget = 0xffffffffu;
   Status reserve(std::size_t which, std::size_t bytes);
   Status upload(std::size_t which, std::span<const std::uint8_t> bytes);
@@ -311,7 +340,7 @@ class ImpostorPass {
                      std::span<render::Vec3> color, std::span<std::int64_t> owner);
   Context* ctx_ = nullptr;
   Mode mode_ = Mode::kCompute;
-  std::uint32_t pipeline_ = 0;
+  std::uint32_t pipeline_ = 0, culled_pipeline_ = 0;
   std::array<std::uint32_t, 8> buffers_{};
   std::uint32_t target_ = kNoTarget;
   std::array<std::uint32_t, 2> target_size_{};
