@@ -18,6 +18,7 @@
 
 #include "adapters/vulkan_adapters.hpp"
 #include "adapters/vulkan_passes.hpp"
+#include "../accel/vulkan/device_test_support.hpp"
 #include "r1/accel/vulkan.hpp"
 #include "r1/backends/registry.hpp"
 #include "r1/reference/epoch.hpp"
@@ -94,6 +95,16 @@ Compared compare(const render::OpaqueLayer& a, const render::OpaqueLayer& b, con
     }
   }
   return c;
+}
+
+// The epoch of a Barabasi-Albert graph of n particles (the generator's defaults otherwise).
+Result<Epoch> ba_epoch(std::int64_t n) {
+  GenParams gp;
+  gp.kind = GenKind::kBa;
+  gp.n = n;
+  R1_ASSIGN(const Snapshot snap, generate(gp));
+  R1_ASSIGN(const Graph graph, build_graph(snap));
+  return run_epoch(snap, graph, {});
 }
 
 std::unique_ptr<vk::Context> context_or_skip(std::string& reason) {
@@ -195,12 +206,7 @@ INSTANTIATE_TEST_SUITE_P(Modes, FramePasses, testing::Values(vk::ImpostorPass::M
 // records and tier lists the pass leaves on the device. Views from inside the graph (spheres
 // reaching the near plane), close, framed, far (far nodes) and looking away (everything culled).
 TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
-  std::string reason;
-  auto ctx = context_or_skip(reason);
-  if (!ctx) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(ctx);
   auto pass = vk::CullPass::build(*ctx);
   ASSERT_TRUE(pass.is_ok()) << pass.status().message();
   std::optional<vk::ImpostorPass> raster;
@@ -210,14 +216,7 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
     raster = std::move(r).value();
   }
   const bool cpu = ctx->info().cpu;
-  GenParams gp;
-  gp.kind = GenKind::kBa;
-  gp.n = 1500;
-  auto snap = generate(gp);
-  ASSERT_TRUE(snap.is_ok());
-  auto graph = build_graph(*snap);
-  ASSERT_TRUE(graph.is_ok());
-  auto epoch = run_epoch(*snap, *graph, {});
+  auto epoch = ba_epoch(1500);
   ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
   const render::Scene scene = render::make_scene(*epoch);
   const double fit = render::fit_distance(scene, 60);
@@ -323,12 +322,7 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
   }
   // The pass holds the scene under its serial: a second scene (another epoch) replaces it.
   EXPECT_EQ(pass->serial(), scene.serial);
-  GenParams gp2;
-  gp2.kind = GenKind::kBa;
-  gp2.n = 400;
-  auto snap2 = generate(gp2);
-  auto graph2 = build_graph(*snap2);
-  auto epoch2 = run_epoch(*snap2, *graph2, {});
+  auto epoch2 = ba_epoch(400);
   ASSERT_TRUE(epoch2.is_ok());
   const render::Scene other = render::make_scene(*epoch2);
   ASSERT_NE(other.serial, scene.serial);
@@ -358,23 +352,11 @@ TEST(FramePassesCull, TheVulkanCullIsTheReferencesWalk) {
 // at two times of the flow, and a copy of a tube under other colours right after it (an exact
 // tie, which the earlier tube keeps).
 TEST(FramePassesEdges, TheVulkanEdgePassIsTheReferencePixelByPixel) {
-  std::string reason;
-  auto ctx = context_or_skip(reason);
-  if (!ctx) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(ctx);
   auto pass = vk::EdgePass::build(*ctx);
   ASSERT_TRUE(pass.is_ok()) << pass.status().message();
   const bool cpu = ctx->info().cpu;
-  GenParams gp;
-  gp.kind = GenKind::kBa;
-  gp.n = 600;
-  auto snap = generate(gp);
-  ASSERT_TRUE(snap.is_ok());
-  auto graph = build_graph(*snap);
-  ASSERT_TRUE(graph.is_ok());
-  auto epoch = run_epoch(*snap, *graph, {});
+  auto epoch = ba_epoch(600);
   ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
   const render::Scene scene = render::make_scene(*epoch);
   const double fit = render::fit_distance(scene, 60);
@@ -453,22 +435,10 @@ TEST(FramePassesEdges, TheVulkanEdgePassIsTheReferencePixelByPixel) {
 // inference counted; two architectures (r1's default, and 8 levels of 2^10 entries with 16
 // hidden); one the device does not infer (256 + 1 hidden) is drawn by the host, as the reference.
 TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
-  std::string reason;
-  auto probe = context_or_skip(reason);
-  if (!probe) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(probe);
   const bool cpu = probe->info().cpu;
   probe.reset();
-  GenParams gp;
-  gp.kind = GenKind::kBa;
-  gp.n = 300;
-  auto snap = generate(gp);
-  ASSERT_TRUE(snap.is_ok());
-  auto graph = build_graph(*snap);
-  ASSERT_TRUE(graph.is_ok());
-  auto epoch = run_epoch(*snap, *graph, {});
+  auto epoch = ba_epoch(300);
   ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
   const render::Scene scene = render::make_scene(*epoch);
   auto reference = backends::make_backend("reference");
@@ -526,23 +496,11 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
 // reference's rule (R1-NRF-004) give the same weight, density, colour and flow bits on lavapipe
 // (within 1e-5 relative on a GPU).
 TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
-  std::string reason;
-  auto ctx = context_or_skip(reason);
-  if (!ctx) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(ctx);
   auto pass = vk::CompositePass::build(*ctx, backends::reference_exp_constants());
   ASSERT_TRUE(pass.is_ok()) << pass.status().message();
   const bool cpu = ctx->info().cpu;
-  GenParams gp;
-  gp.kind = GenKind::kBa;
-  gp.n = 300;
-  auto snap = generate(gp);
-  ASSERT_TRUE(snap.is_ok());
-  auto graph = build_graph(*snap);
-  ASSERT_TRUE(graph.is_ok());
-  auto epoch = run_epoch(*snap, *graph, {});
+  auto epoch = ba_epoch(300);
   ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
   const render::Scene scene = render::make_scene(*epoch);
   render::NeuralConfig c;
@@ -593,21 +551,9 @@ TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
 // holding 2 candidate nodes a ray, so most rays of the far views take the host's fall-back, which
 // must give the same frames.
 TEST(FramePassesComposite, TheVulkanFieldAndCompositeAreTheReferenceFrames) {
-  std::string reason;
-  auto probe = context_or_skip(reason);
-  if (!probe) {
-    if (std::getenv("R1_REQUIRE_VULKAN") != nullptr) FAIL() << "R1_REQUIRE_VULKAN is set and " << reason;
-    GTEST_SKIP() << reason;
-  }
+  R1_NEED_DEVICE(probe);
   probe.reset();
-  GenParams gp;
-  gp.kind = GenKind::kBa;
-  gp.n = 400;
-  auto snap = generate(gp);
-  ASSERT_TRUE(snap.is_ok());
-  auto graph = build_graph(*snap);
-  ASSERT_TRUE(graph.is_ok());
-  auto epoch = run_epoch(*snap, *graph, {});
+  auto epoch = ba_epoch(400);
   ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
   auto reference = backends::make_backend("reference");
   ASSERT_TRUE(reference.is_ok());

@@ -249,22 +249,8 @@ Result<bool> EdgePass::draw(const ImpostorCamera& cam, const EdgeData& edges, st
     R1_TRY(ctx.buffer_write(buffers_[4], detail::bytes_of(std::span<const double>(t.data() + at, n)), 0));
     R1_TRY(ctx.buffer_write(buffers_[5], detail::bytes_of(std::span<const double>(cbuf.data(), n * 3)), 0));
     R1_TRY(ctx.buffer_write(buffers_[6], detail::bytes_of(std::span<const std::int32_t>(obuf.data(), n)), 0));
-    const std::uint32_t push[5] = {cam.width, cam.height, tiles_x, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows)};
-    std::uint8_t push_bytes[sizeof push];
-    std::memcpy(push_bytes, push, sizeof push);
-    R1_TRY(ctx.dispatch(pipeline_, slots, {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));
-    R1_ASSIGN(const auto tb, ctx.buffer_read(buffers_[4], 0, n * sizeof(double)));
-    R1_ASSIGN(const auto cb, ctx.buffer_read(buffers_[5], 0, n * 3 * sizeof(double)));
-    R1_ASSIGN(const auto ob, ctx.buffer_read(buffers_[6], 0, n * sizeof(std::int32_t)));
-    std::memcpy(t.data() + at, tb.data(), tb.size());
-    for (std::size_t k = 0; k < n; ++k) {
-      double c[3];
-      std::memcpy(c, cb.data() + k * 24, 24);
-      color[at + k] = {c[0], c[1], c[2]};
-      std::int32_t o = 0;
-      std::memcpy(&o, ob.data() + k * 4, 4);
-      owner[at + k] = o;
-    }
+    R1_TRY(detail::layer_band(ctx, pipeline_, slots, cam.width, cam.height, tiles_x, y0, rows, {buffers_[4], buffers_[5], buffers_[6]}, t,
+                              color, owner));
   }
   return true;
 }

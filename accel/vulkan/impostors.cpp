@@ -500,23 +500,9 @@ Status ImpostorPass::draw_compute(const ImpostorCamera& cam, std::span<const Imp
   Slot slots[8];
   for (std::uint32_t b = 0; b < 8; ++b) slots[b] = {b, buffers_[b]};
   for (std::size_t y0 = 0; y0 < cam.height; y0 += band_rows) {
-    const std::size_t rows = std::min<std::size_t>(band_rows, cam.height - y0), n = rows * cam.width, at = y0 * cam.width;
-    const std::uint32_t push[5] = {cam.width, cam.height, tiles_x, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows)};
-    std::uint8_t push_bytes[sizeof push];
-    std::memcpy(push_bytes, push, sizeof push);
-    R1_TRY(ctx_->dispatch(pipeline_, slots, {(cam.width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));
-    R1_ASSIGN(const auto tb, ctx_->buffer_read(buffers_[4], 0, n * sizeof(double)));
-    R1_ASSIGN(const auto cb, ctx_->buffer_read(buffers_[5], 0, n * 3 * sizeof(double)));
-    R1_ASSIGN(const auto ob, ctx_->buffer_read(buffers_[6], 0, n * sizeof(std::int32_t)));
-    std::memcpy(t.data() + at, tb.data(), tb.size());
-    for (std::size_t k = 0; k < n; ++k) {
-      double c[3];
-      std::memcpy(c, cb.data() + k * 24, 24);
-      color[at + k] = {c[0], c[1], c[2]};
-      std::int32_t o = 0;
-      std::memcpy(&o, ob.data() + k * 4, 4);
-      owner[at + k] = o;
-    }
+    const std::size_t rows = std::min<std::size_t>(band_rows, cam.height - y0);
+    R1_TRY(detail::layer_band(*ctx_, pipeline_, slots, cam.width, cam.height, tiles_x, y0, rows, {buffers_[4], buffers_[5], buffers_[6]}, t,
+                              color, owner));
   }
   return Status::ok();
 }

@@ -5,13 +5,42 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <span>
+
+#include "r1/accel/vulkan.hpp"
 
 namespace r1::vk::detail {
 
 template <class T>
 std::span<const std::uint8_t> bytes_of(std::span<const T> v) {
   return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size_bytes()};
+}
+
+// One band of rows of a per-pixel layer pass (the impostor and edge passes): 8 x 8 workgroups
+// over `rows` rows from y0 (push constants width, height, tiles_x, y0, rows), then the band's
+// t, colour (3 doubles) and owner (int32) read from buffers t_buf, c_buf, o_buf into the layer.
+inline Status layer_band(Context& ctx, std::uint32_t pipeline, std::span<const Slot> slots, std::uint32_t width, std::uint32_t height,
+                         std::uint32_t tiles_x, std::size_t y0, std::size_t rows, std::array<std::uint32_t, 3> bufs,
+                         std::span<double> t, std::span<render::Vec3> color, std::span<std::int64_t> owner) {
+  const std::size_t n = rows * width, at = y0 * width;
+  const std::uint32_t push[5] = {width, height, tiles_x, static_cast<std::uint32_t>(y0), static_cast<std::uint32_t>(rows)};
+  std::uint8_t push_bytes[sizeof push];
+  std::memcpy(push_bytes, push, sizeof push);
+  R1_TRY(ctx.dispatch(pipeline, slots, {(width + 7) / 8, static_cast<std::uint32_t>((rows + 7) / 8), 1}, push_bytes));
+  R1_ASSIGN(const auto tb, ctx.buffer_read(bufs[0], 0, n * sizeof(double)));
+  R1_ASSIGN(const auto cb, ctx.buffer_read(bufs[1], 0, n * 3 * sizeof(double)));
+  R1_ASSIGN(const auto ob, ctx.buffer_read(bufs[2], 0, n * sizeof(std::int32_t)));
+  std::memcpy(t.data() + at, tb.data(), tb.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    double c[3];
+    std::memcpy(c, cb.data() + k * 24, 24);
+    color[at + k] = {c[0], c[1], c[2]};
+    std::int32_t o = 0;
+    std::memcpy(&o, ob.data() + k * 4, 4);
+    owner[at + k] = o;
+  }
+  return Status::ok();
 }
 
 // Workgroups of 64 invocations for `count` elements, spread over y past the 65535 of x; the
