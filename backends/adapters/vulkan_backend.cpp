@@ -1,8 +1,9 @@
 // The vulkan backend (spec/backends.md R1-BKD-065..070): on accel/vulkan's context the frame's
 // cull, its T1/T2 impostor pass (a graphics pipeline, or a compute shader), its edge tubes, the
 // splats' depth sort and its field and composite pass, and the spectral solver's and the focus's
-// exact kernels; edge bundling, splat binning, labels and the other epoch work on the host (the reference's passes, the
-// cpu backend's stages). Its epochs are the reference's bytes. Its 13.1 device is the Vulkan device on the same context.
+// exact kernels; edge bundling, splat binning, labels and the other epoch work on the host (the
+// reference's passes, the cpu backend's stages). Its epochs are the reference's bytes. Its 13.1
+// device is the Vulkan device on the same context.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -93,10 +94,6 @@ Status draw_on_device(PassState& st, std::span<const render::Impostor> list, con
   }
   return st.impostors.draw(cam, items, layer.t, layer.color, layer.owner);
 }
-
-}  // namespace
-
-namespace {
 
 // The scene as vk::CullPass reads it (R1-BKD-074, 077).
 void flatten_scene(const render::Scene& s, std::array<std::vector<double>, kLevels>& node,
@@ -292,7 +289,6 @@ vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
   fd.enabled = v.field;
   return fd;
 }
-
 
 Status composite_on_device(PassState& st, const render::CompositeInput& in, render::Image& image, render::FrameStats& stats) {
   const render::View& v = in.view;
