@@ -67,7 +67,6 @@ void main() {
 // is its bounding cube's pixel rectangle, project_box (reference/render/cull.cpp) in fp64.
 constexpr const char* kVertexCulled = R"(
 layout(location = 0) flat out uint item;
-const double kNearPlane = 1e-3LF;
 void main() {
   uint i = instance_item[gl_InstanceIndex];
   int v = gl_VertexIndex;
@@ -84,10 +83,10 @@ void main() {
   for (int k = 0; k < 8; ++k) {
     dvec3 corner = dvec3((k & 1) != 0 ? hi.x : lo.x, (k & 2) != 0 ? hi.y : lo.y, (k & 4) != 0 ? hi.z : lo.z);
     precise dvec3 rel = corner - pos;
-    precise double depth = rel.x * fwd.x + rel.y * fwd.y + rel.z * fwd.z;
-    if (depth <= kNearPlane) { whole = true; break; }
-    precise double px = w * 0.5LF + (rel.x * right.x + rel.y * right.y + rel.z * right.z) / depth * focal;
-    precise double py = h * 0.5LF - (rel.x * up.x + rel.y * up.y + rel.z * up.z) / depth * focal;
+    double depth = dotp(rel, fwd);
+    if (depth <= kNear) { whole = true; break; }
+    precise double px = w * 0.5LF + dotp(rel, right) / depth * focal;
+    precise double py = h * 0.5LF - dotp(rel, up) / depth * focal;
     minx = k == 0 ? px : min(minx, px); maxx = k == 0 ? px : max(maxx, px);
     miny = k == 0 ? py : min(miny, py); maxy = k == 0 ? py : max(maxy, py);
   }
@@ -430,7 +429,8 @@ Result<ImpostorPass> ImpostorPass::build(Context& ctx, Mode mode) {
   } else {
     const std::string fragment = std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kShapes + kFragmentMain;
     R1_ASSIGN(pass.pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexMain, fragment, "impostors"));
-    R1_ASSIGN(pass.culled_pipeline_, ctx.graphics_compile(std::string(kRasterBindings) + kVertexCulled, fragment, "impostors_culled"));
+    const std::string culled = std::string(kRasterBindings) + "#define CAMERA cam\n" + detail::kPixelRay + detail::kRayRoots + kVertexCulled;
+    R1_ASSIGN(pass.culled_pipeline_, ctx.graphics_compile(culled, fragment, "impostors_culled"));
   }
   return pass;
 }
@@ -512,9 +512,9 @@ Status ImpostorPass::draw_raster(const ImpostorCamera& cam, std::span<const Impo
   // One instance (a quad, six vertices) per item, in item order: one indirect draw.
   std::vector<std::uint32_t> instances(items.size());
   for (std::size_t i = 0; i < items.size(); ++i) instances[i] = static_cast<std::uint32_t>(i);
-  const std::uint32_t args[4] = {6, static_cast<std::uint32_t>(items.size()), 0, 0};
+  const DrawArgs args{6, static_cast<std::uint32_t>(items.size()), 0, 0};
   R1_TRY(upload(2, detail::bytes_of(std::span<const std::uint32_t>(instances))));
-  R1_TRY(upload(3, detail::bytes_of(std::span<const std::uint32_t>(args))));
+  R1_TRY(upload(3, detail::bytes_of(std::span<const DrawArgs>(&args, 1))));
   // Depth t / (2 t_far): every hit lies within the items' bounding spheres, so below 1/2.
   double far = 1;
   for (const ImpostorItem& it : items) {
