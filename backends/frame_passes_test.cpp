@@ -493,8 +493,8 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
 // The device's inference pass alone (R1-BKD-076) against NeuralField::evaluate at 3,000 queries:
 // points inside and outside the cube, kernels below tau_lo, within the range (the tau feature's
 // log2) and beyond tau_hi (the similarity to the centroid). The raw outputs decoded by the
-// reference's rule (R1-NRF-004) give the same weight, density, colour and flow bits on lavapipe
-// (within 1e-5 relative on a GPU).
+// reference's rule (R1-NRF-004, the Gaussian prior of R1-NRF-007) give the same weight, density,
+// colour and flow bits on lavapipe (within 1e-5 relative on a GPU).
 TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
   R1_NEED_DEVICE(ctx);
   auto pass = vk::CompositePass::build(*ctx, backends::reference_exp_constants());
@@ -530,7 +530,7 @@ TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
     const render::FieldValue want = f.evaluate(x, sigma);
     const float* o = out->data() + i * 7;
     const double o0 = o[0];
-    const double weight = o0 > 30 ? std::expm1(o0) : std::exp(o0);
+    const double weight = std::exp(o0) * f.prior(x, sigma);  // R1-NRF-007
     const double got[8] = {weight, f.kappa / sigma * weight, 3 * sigmoid(o[1]), 3 * sigmoid(o[2]), 3 * sigmoid(o[3]),
                            static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
     const double expect[8] = {want.weight, want.density, want.color.x, want.color.y, want.color.z, want.flow.x, want.flow.y, want.flow.z};

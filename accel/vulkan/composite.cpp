@@ -242,10 +242,23 @@ void main() {
           entry[e * 4u] = xs.x; entry[e * 4u + 1u] = xs.y; entry[e * 4u + 2u] = xs.z; entry[e * 4u + 3u] = sigma;
           continue;
         }
-        // The heads (R1-NRF-004): kernel sum exp(o0) (expm1(softplus(o0))), density kappa / sigma
-        // times it, colour 3 sigmoid(o1..3), flow sigma o4..6.
+        // The heads (R1-NRF-004): kernel sum exp(o0) times the Gaussian prior (R1-NRF-007; without
+        // one, expm1(softplus(o0))), density kappa / sigma times it, colour 3 sigmoid(o1..3), flow
+        // sigma o4..6.
         double o0 = double(nout[e * 7u]);
         precise double w = o0 > 30.0LF ? det_exp(o0) - 1.0LF : det_exp(o0);
+        if (prm[38] > 0.0LF) {
+          precise double s2 = sigma * sigma;
+          precise double v = s2 + prm[39];
+          precise double r = s2 / v;
+          precise double dx = xs.x - prm[40];
+          precise double dy = xs.y - prm[41];
+          precise double dz = xs.z - prm[42];
+          precise double q = (dx * dx + dy * dy + dz * dz) / (2.0LF * v);
+          precise double prior = prm[38] * r * sqrt(r) * det_exp(-q);
+          precise double wp = det_exp(o0) * prior;
+          w = wp;
+        }
         if (!(w > 0.0LF)) continue;
         precise double density = prm[37] / sigma * w;
         precise double alpha = 1.0LF - det_exp(-density * delta);
@@ -536,7 +549,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
                       top_ptr = append(field.top_ptr), top = append(field.top), splat_ptr = append(splats.tile_ptr),
                       splat_list = append(splats.tile), next = append(field.next), parent = append(field.parent);
   if (idx.empty()) idx.push_back(0);
-  std::vector<double> prm(40, 0.0);
+  std::vector<double> prm(44, 0.0);
   const double camera[13] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z, cam.up.x,
                              cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z, cam.focal_px};
   std::copy(camera, camera + 13, prm.begin());
@@ -559,6 +572,8 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   if (nd != nullptr) {
     R1_ASSIGN(infer_push, upload_neural(*nd, std::max<std::uint32_t>(field.samples, 1)));
     prm[37] = nd->kappa;
+    prm[38] = nd->prior_mass, prm[39] = nd->prior_s2;
+    prm[40] = nd->centroid.x, prm[41] = nd->centroid.y, prm[42] = nd->centroid.z;
   }
   R1_TRY(ensure_write(6, std::span<const double>(prm)));
   // Bands of rows whose opaque layer and results fit one storage buffer each, and with the neural

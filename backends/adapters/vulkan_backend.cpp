@@ -187,6 +187,7 @@ vk::NeuralData neural_data(const render::NeuralField& f) {
   n.resolution = f.resolution;
   n.lo = f.lo, n.centroid = f.centroid;
   n.size = f.size, n.tau_lo = f.tau_lo, n.tau_hi = f.tau_hi, n.kappa = f.kappa;
+  n.prior_mass = f.prior_mass, n.prior_s2 = f.prior_s2;
   n.log2_range = f.tau_hi > f.tau_lo ? std::log2(f.tau_hi / f.tau_lo) : 0.0;
   n.params.reserve(f.grid.size() + f.w1.size() + f.b1.size() + f.w2.size() + f.b2.size() + f.w3.size() + f.b3.size());
   for (const std::vector<float>* part : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})

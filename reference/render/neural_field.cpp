@@ -45,7 +45,6 @@ struct Location {
   float* mask;
 };
 
-double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
 double sigmoid(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
 // The network's input: the cube coordinates of x and the tau feature (R1-NRF-003).
@@ -127,14 +126,15 @@ void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
   O = (H2 * W3.transpose()).rowwise() + B3;
 }
 
-// What the heads mean (R1-NRF-004): density s = softplus(o0) with kernel sum expm1(s), colour
-// 3 sigmoid(o1..3) (linear light times brightness, at most 3), flow sigma o4..6.
-FieldValue decode_outputs(const NeuralField& f, const float* o, double sigma) {
+// What the heads mean (R1-NRF-004, R1-NRF-007): the kernel sum exp(o0) times the Gaussian prior
+// at (x, sigma) (a field without a prior: expm1(softplus(o0))), colour 3 sigmoid(o1..3) (linear
+// light times brightness, at most 3), flow sigma o4..6.
+FieldValue decode_outputs(const NeuralField& f, const float* o, const Vec3& x, double sigma) {
   FieldValue v;
-  // expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one rounding a device
-  // repeats), and expm1(o0) where softplus is o0 (R1-NRF-004).
+  // Without a prior, expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one
+  // rounding a device repeats), and expm1(o0) where softplus is o0.
   const double o0 = static_cast<double>(o[0]);
-  v.weight = o0 > 30 ? std::expm1(o0) : std::exp(o0);
+  v.weight = f.prior_mass > 0 ? std::exp(o0) * f.prior(x, sigma) : o0 > 30 ? std::expm1(o0) : std::exp(o0);
   v.density = f.kappa / sigma * v.weight;
   v.color = Vec3{3 * sigmoid(static_cast<double>(o[1])), 3 * sigmoid(static_cast<double>(o[2])), 3 * sigmoid(static_cast<double>(o[3]))};
   v.flow = Vec3{static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
@@ -146,6 +146,7 @@ struct Sample {
   Query q;
   float target[kNeuralOutputs];  // log1p(kernel sum), colour, flow / sigma
   float weight_cf = 0;           // weight of the colour and flow terms: min(1, kernel sum)
+  double prior = 1;              // the prior's kernel sum at the point (R1-NRF-007)
 };
 
 double gaussian(std::uint64_t seed, std::uint64_t item, std::uint64_t dim) {
@@ -211,6 +212,17 @@ void infer_layer(const float* in, std::uint32_t ni, const float* w, const float*
 
 }  // namespace
 
+// The order of operations a device repeats (R1-NRF-007).
+double NeuralField::prior(const Vec3& x, double sigma) const {
+  if (!(prior_mass > 0)) return 1.0;
+  const double s2 = sigma * sigma;
+  const double v = s2 + prior_s2;
+  const double r = s2 / v;
+  const double dx = x.x - centroid.x, dy = x.y - centroid.y, dz = x.z - centroid.z;
+  const double q = (dx * dx + dy * dy + dz * dz) / (2.0 * v);
+  return prior_mass * r * std::sqrt(r) * std::exp(-q);
+}
+
 FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
   thread_local std::vector<std::uint32_t> index;
   thread_local std::vector<float> weight, mask, features, h1, h2;
@@ -228,7 +240,7 @@ FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
   infer_layer(features.data(), inputs(), w1.data(), b1.data(), config.hidden, false, h1.data());
   infer_layer(h1.data(), config.hidden, w2.data(), b2.data(), config.hidden, false, h2.data());
   infer_layer(h2.data(), config.hidden, w3.data(), b3.data(), kNeuralOutputs, true, o);
-  return decode_outputs(*this, o, sigma);
+  return decode_outputs(*this, o, x, sigma);
 }
 
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
@@ -261,6 +273,17 @@ NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed
     lo = Vec3{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = Vec3{std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
+  // The Gaussian prior (R1-NRF-007): the far field's mass (every particle at weight n phi) and
+  // its spread about the centroid per axis, summed in particle order.
+  double mass = 0, spread = 0;
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    const double wp = static_cast<double>(s.n) * s.phi[p];
+    const Vec3 d = s.position[p] - s.centroid;
+    mass += wp;
+    spread += wp * (d.x * d.x + d.y * d.y + d.z * d.z);
+  }
+  f.prior_mass = mass;
+  f.prior_s2 = mass > 0 ? spread / (3 * mass) : 0.0;
   f.tau_hi = std::max(16.0 * f.tau_lo, (kPointMass * extent) * (kPointMass * extent));
   const double margin = 3 * std::sqrt(f.tau_hi);
   f.size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 2 * margin;
@@ -326,6 +349,7 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
       const FieldValue v = field_hierarchical(ff, x, sigma);
       Sample& smp = set[k];
       smp.q = make_query(f, x, sigma);
+      smp.prior = f.prior(x, sigma);
       smp.target[0] = static_cast<float>(std::log1p(v.weight));
       smp.target[1] = static_cast<float>(v.color.x / 3);
       smp.target[2] = static_cast<float>(v.color.y / 3);
@@ -363,7 +387,8 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
     mean[0] /= static_cast<double>(set.size());
     for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] = cw > 0 ? mean[k] / cw : 0.0;
     if (init_biases) {
-      f.b3[0] = static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
+      // With the prior the density head starts at the prior itself (o0 = 0).
+      f.b3[0] = f.prior_mass > 0 ? 0.0f : static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
       for (std::uint32_t k = 1; k <= 3; ++k) {
         const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
         f.b3[k] = static_cast<float>(std::log(m / (1 - m)));
@@ -448,10 +473,12 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
       const double scale = 1.0 / c.batch;
       for (Eigen::Index r = 0; r < rows; ++r) {
         const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % samples];
-        const double s0 = softplus(static_cast<double>(O(r, 0)));
-        const double r0 = s0 - static_cast<double>(smp.target[0]);
+        // The density head in log1p units of the kernel sum w = exp(o0) times the prior (1 for a
+        // field without one, where log1p(w) is softplus(o0)); d log1p(w) / d o0 = w / (1 + w).
+        const double wh = std::exp(static_cast<double>(O(r, 0))) * smp.prior;
+        const double r0 = std::log1p(wh) - static_cast<double>(smp.target[0]);
         double loss = head_weight[0] * r0 * r0;
-        dO(r, 0) = static_cast<float>(2 * head_weight[0] * r0 * sigmoid(static_cast<double>(O(r, 0))) * scale);
+        dO(r, 0) = static_cast<float>(2 * head_weight[0] * r0 * (wh / (1 + wh)) * scale);
         for (int k = 1; k <= 3; ++k) {
           const double sg = sigmoid(static_cast<double>(O(r, k)));
           const double d = sg - static_cast<double>(smp.target[k]);
@@ -615,7 +642,8 @@ Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev,
 // ---- file (R1-NRF-030) ------------------------------------------------------------------------
 
 namespace {
-constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\2'};
+constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\3'};
+constexpr char kMagicV2[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\2'};
 constexpr char kMagicV1[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\1'};
 void put_floats(std::string& out, const std::vector<float>& v) {
   for (const float x : v) format::put_f32(out, x);
@@ -638,6 +666,8 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
   format::put_u32(out, f.local_updates);
   for (const double v : {f.update_lo.x, f.update_lo.y, f.update_lo.z, f.update_hi.x, f.update_hi.y, f.update_hi.z})
     format::put_f64(out, v);
+  format::put_f64(out, f.prior_mass);
+  format::put_f64(out, f.prior_s2);
   for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
   format::put_bytes(out, d);
@@ -647,10 +677,11 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
 Result<NeuralField> decode_neural_field(std::string_view bytes, const std::string& name,
                                         std::span<const std::uint8_t> snapshot) {
   const std::size_t kDigest = sizeof(hemera::Digest);
-  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1 or 2)");
-  const bool v1 = bytes.substr(0, sizeof kMagic) == std::string_view(kMagicV1, sizeof kMagicV1);
-  if (!v1 && bytes.substr(0, sizeof kMagic) != std::string_view(kMagic, sizeof kMagic))
-    return Status::input(name + ": not an r1 neural field (r1-nrf version 1 or 2)");
+  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1, 2 or 3)");
+  const std::string_view magic = bytes.substr(0, sizeof kMagic);
+  const bool v1 = magic == std::string_view(kMagicV1, sizeof kMagicV1), v2 = magic == std::string_view(kMagicV2, sizeof kMagicV2);
+  if (!v1 && !v2 && magic != std::string_view(kMagic, sizeof kMagic))
+    return Status::input(name + ": not an r1 neural field (r1-nrf version 1, 2 or 3)");
   const std::string_view body = bytes.substr(0, bytes.size() - kDigest);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(body.data()), body.size()));
   if (!std::equal(d.begin(), d.end(), reinterpret_cast<const std::uint8_t*>(bytes.data() + body.size())))
@@ -681,6 +712,11 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
     if (!r.u32(f.local_updates)) return r.error("truncated");
     for (double* v : {&f.update_lo.x, &f.update_lo.y, &f.update_lo.z, &f.update_hi.x, &f.update_hi.y, &f.update_hi.z})
       if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad update box");
+  }
+  if (!v1 && !v2) {
+    if (!r.f64(f.prior_mass) || !r.f64(f.prior_s2)) return r.error("truncated");
+    if (!(f.prior_mass >= 0) || !(f.prior_s2 >= 0) || !std::isfinite(f.prior_mass) || !std::isfinite(f.prior_s2))
+      return r.error("bad prior");
   }
   const std::uint32_t ni = f.inputs(), nh = c.hidden;
   const std::size_t sizes[7] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,

@@ -43,6 +43,10 @@ struct NeuralField {
   Vec3 centroid;                          // the scene's phi-weighted centroid (R1-NRF-005)
   double tau_lo = 1, tau_hi = 1;          // the trained tau range (R1-NRF-001, R1-NRF-005)
   double kappa = 0.25;                    // R1-RND-052's density gain
+  double prior_mass = 0, prior_s2 = 0;    // the Gaussian prior (R1-NRF-007); mass 0: none
+  // The prior's kernel sum at (x, sigma): the scene as one isotropic Gaussian of its mass and
+  // spread about the centroid; 1 when the field has none.
+  double prior(const Vec3& x, double sigma) const;
   std::uint64_t seed = 0;                 // R1-NRF-020
   std::vector<float> grid;                // levels x 2^log2_table x 2
   std::vector<float> w1, b1, w2, b2, w3, b3;  // row-major: w1 is hidden x inputs

@@ -396,6 +396,7 @@ struct NeuralData {
   render::Vec3 lo, centroid;
   double size = 1, tau_lo = 1, tau_hi = 1, kappa = 0;
   double log2_range = 0;                   // log2(tau_hi / tau_lo), the host's
+  double prior_mass = 0, prior_s2 = 0;     // the Gaussian prior (R1-NRF-007); mass 0: none
   std::vector<float> params;
   std::uint32_t inputs() const { return levels * 2 + 1; }
 };
