@@ -114,6 +114,7 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
   ff.frame = f;
   ff.camera = v.camera.position;
   ff.tiers = v.tiers;
+  if (s.neural != nullptr) ff.neural = std::make_shared<const NeuralInference>(*s.neural);
   // Classify from the top; only kMixed nodes are opened and get aggregates of their own, over
   // their members with field weight > 0 (weights, centroid, colour, extent; R1-RND-054).
   // Every node under a kBehind one is marked kBehind too (a walk never opens them, but node()
@@ -358,7 +359,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
         return within_reach(x, c->node.centroid, c->node.extent, reach);
       });
       if (!near) continue;
-      v = s.neural->evaluate(x, sigma);
+      v = ff.neural ? ff.neural->evaluate(x, sigma) : s.neural->evaluate(x, sigma);
       if (stats) ++stats->neural;
     } else {
       Accumulator acc;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "cull.hpp"
@@ -33,6 +34,8 @@ struct NodeField {
 // scene's (NodeData, computed once per epoch) and nothing below it is visited; a kBehind node
 // weighs 0; only kMixed nodes get aggregates of their own, computed over their members. A pure
 // far view therefore costs the top of the hierarchy, not |P|.
+class NeuralInference;
+
 struct FieldFrame {
   static constexpr std::uint32_t kFarSlot = 0xFFFFFFFFu, kBehindSlot = 0xFFFFFFFEu;
   const Scene* scene = nullptr;
@@ -62,6 +65,8 @@ struct FieldFrame {
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   FieldParams params;
+  // The scene's neural field made ready for the frame's evaluations (R1-NRF-031), when it has one.
+  std::shared_ptr<const NeuralInference> neural;
 
   // Particle p's field weight: its T-infinity weight (1 below the handoff band, 0 above it, linear
   // across it, R1-RND-045) times n phi(p).

@@ -196,18 +196,28 @@ namespace {
 
 // One layer of inference (R1-NRF-006): out[j] = max(0, (sum_i in[i] w[j][i], i ascending from 0)
 // + b[j]) in float, each product and sum rounded (no contraction), ReLU unless `linear`. A device
-// that sums in the same order gets the same bits; the loops run over i outside j so the outputs'
-// independent sums can share vector lanes without changing any sum's order.
-void infer_layer(const float* in, std::uint32_t ni, const float* w, const float* b, std::uint32_t no, bool linear, float* out) {
+// that sums in the same order gets the same bits. `wt` holds w input-major (w[j][i] at
+// wt[i * no + j]): the loops run over i outside j, so the outputs' independent sums share vector
+// lanes without changing any sum's order.
+void infer_layer(const float* in, std::uint32_t ni, const float* wt, const float* b, std::uint32_t no, bool linear, float* out) {
   std::fill(out, out + no, 0.0f);
   for (std::uint32_t i = 0; i < ni; ++i) {
     const float xi = in[i];
-    for (std::uint32_t j = 0; j < no; ++j) out[j] += xi * w[std::size_t{j} * ni + i];
+    const float* row = wt + std::size_t{i} * no;
+    for (std::uint32_t j = 0; j < no; ++j) out[j] += xi * row[j];
   }
   for (std::uint32_t j = 0; j < no; ++j) {
     out[j] += b[j];
     if (!linear) out[j] = std::max(out[j], 0.0f);
   }
+}
+
+// w (no x ni, row-major) input-major.
+std::vector<float> input_major(const std::vector<float>& w, std::uint32_t no, std::uint32_t ni) {
+  std::vector<float> t(w.size());
+  for (std::uint32_t j = 0; j < no; ++j)
+    for (std::uint32_t i = 0; i < ni; ++i) t[std::size_t{i} * no + j] = w[std::size_t{j} * ni + i];
+  return t;
 }
 
 }  // namespace
@@ -223,25 +233,34 @@ double NeuralField::prior(const Vec3& x, double sigma) const {
   return prior_mass * r * std::sqrt(r) * std::exp(-q);
 }
 
-FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const {
+NeuralInference::NeuralInference(const NeuralField& f)
+    : f_(f),
+      w1t_(input_major(f.w1, f.config.hidden, f.inputs())),
+      w2t_(input_major(f.w2, f.config.hidden, f.config.hidden)),
+      w3t_(input_major(f.w3, kNeuralOutputs, f.config.hidden)) {}
+
+FieldValue NeuralInference::evaluate(const Vec3& x, double sigma) const {
+  const NeuralField& f = f_;
   thread_local std::vector<std::uint32_t> index;
   thread_local std::vector<float> weight, mask, features, h1, h2;
-  index.resize(config.levels * 8);
-  weight.resize(config.levels * 8);
-  mask.resize(config.levels);
-  features.resize(inputs());
-  h1.resize(config.hidden);
-  h2.resize(config.hidden);
+  index.resize(f.config.levels * 8);
+  weight.resize(f.config.levels * 8);
+  mask.resize(f.config.levels);
+  features.resize(f.inputs());
+  h1.resize(f.config.hidden);
+  h2.resize(f.config.hidden);
   const Location e{index.data(), weight.data(), mask.data()};
-  const Query q = make_query(*this, x, sigma);
-  locate(*this, q, e);
-  gather(*this, e, q.t, features.data());
+  const Query q = make_query(f, x, sigma);
+  locate(f, q, e);
+  gather(f, e, q.t, features.data());
   float o[kNeuralOutputs];
-  infer_layer(features.data(), inputs(), w1.data(), b1.data(), config.hidden, false, h1.data());
-  infer_layer(h1.data(), config.hidden, w2.data(), b2.data(), config.hidden, false, h2.data());
-  infer_layer(h2.data(), config.hidden, w3.data(), b3.data(), kNeuralOutputs, true, o);
-  return decode_outputs(*this, o, x, sigma);
+  infer_layer(features.data(), f.inputs(), w1t_.data(), f.b1.data(), f.config.hidden, false, h1.data());
+  infer_layer(h1.data(), f.config.hidden, w2t_.data(), f.b2.data(), f.config.hidden, false, h2.data());
+  infer_layer(h2.data(), f.config.hidden, w3t_.data(), f.b3.data(), kNeuralOutputs, true, o);
+  return decode_outputs(f, o, x, sigma);
 }
+
+FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const { return NeuralInference(*this).evaluate(x, sigma); }
 
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
   std::vector<std::uint8_t> m(snapshot_digest.begin(), snapshot_digest.end());

@@ -62,6 +62,20 @@ struct NeuralField {
   FieldValue evaluate(const Vec3& x, double sigma) const;
 };
 
+// The field made ready for many evaluations (a frame's): each layer's weights input-major, so a
+// layer's outputs share vector lanes while each output is still summed over its inputs in
+// ascending order (R1-NRF-006). It gives NeuralField::evaluate's bits, which is built on it.
+// Holds a reference to the field, which must outlive it.
+class NeuralInference {
+ public:
+  explicit NeuralInference(const NeuralField& f);
+  FieldValue evaluate(const Vec3& x, double sigma) const;
+
+ private:
+  const NeuralField& f_;
+  std::vector<float> w1t_, w2t_, w3t_;  // w[j][i] at [i * outputs + j]
+};
+
 // The training seed (R1-NRF-020): the first 8 bytes of Hemera(snapshot digest || "nrf").
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest);
 
