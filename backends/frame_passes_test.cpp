@@ -493,7 +493,7 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
 // The device's inference pass alone (R1-BKD-076) against NeuralField::evaluate at 3,000 queries:
 // points inside and outside the cube, kernels below tau_lo, within the range (the tau feature's
 // log2) and beyond tau_hi (the similarity to the centroid). The raw outputs decoded by the
-// reference's rule (R1-NRF-004, the Gaussian prior of R1-NRF-007) give the same weight, density,
+// reference's rule (decode_neural_outputs: R1-NRF-004, 007, 008) give the same weight, density,
 // colour and flow bits on lavapipe (within 1e-5 relative on a GPU).
 TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
   R1_NEED_DEVICE(ctx);
@@ -523,16 +523,12 @@ TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
   EXPECT_GT(within_range, 1000u);
   auto out = pass->infer(backends::neural_data(f), queries);
   ASSERT_TRUE(out.is_ok()) << out.status().message();
-  const auto sigmoid = [](double x) { return 1.0 / (1.0 + std::exp(-x)); };
   for (std::size_t i = 0; i < queries.size() / 4; ++i) {
     const render::Vec3 x{queries[i * 4], queries[i * 4 + 1], queries[i * 4 + 2]};
     const double sigma = queries[i * 4 + 3];
     const render::FieldValue want = f.evaluate(x, sigma);
-    const float* o = out->data() + i * 7;
-    const double o0 = o[0];
-    const double weight = std::exp(o0) * f.prior(x, sigma);  // R1-NRF-007
-    const double got[8] = {weight, f.kappa / sigma * weight, 3 * sigmoid(o[1]), 3 * sigmoid(o[2]), 3 * sigmoid(o[3]),
-                           static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
+    const render::FieldValue dec = render::decode_neural_outputs(f, out->data() + i * 7, x, sigma);
+    const double got[8] = {dec.weight, dec.density, dec.color.x, dec.color.y, dec.color.z, dec.flow.x, dec.flow.y, dec.flow.z};
     const double expect[8] = {want.weight, want.density, want.color.x, want.color.y, want.color.z, want.flow.x, want.flow.y, want.flow.z};
     for (int k = 0; k < 8; ++k) {
       if (cpu) ASSERT_EQ(got[k], expect[k]) << "query " << i << " value " << k;

@@ -265,6 +265,22 @@ void main() {
         precise dvec3 col = dvec3(3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 1u])))),
                                   3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 2u])))),
                                   3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 3u])))));
+        if (prm[38] > 0.0LF) {
+          // 3 sigmoid(o + logit(q)) for the prior's colour q (R1-NRF-008): 3 q / (q + (1 - q) e^-o).
+          precise double v = sigma * sigma + prm[39];
+          precise double dx = xs.x - prm[40];
+          precise double dy = xs.y - prm[41];
+          precise double dz = xs.z - prm[42];
+          double cq[3];
+          for (int k = 0; k < 3; ++k) {
+            precise double g = (prm[46 + 3 * k] * dx + prm[47 + 3 * k] * dy) + prm[48 + 3 * k] * dz;
+            precise double q0 = (prm[43 + k] + g / v) / 3.0LF;
+            double q = clamp(q0, 1e-3LF, 1.0LF - 1e-3LF);
+            precise double ck = 3.0LF * q / (q + (1.0LF - q) * det_exp(-double(nout[e * 7u + 1u + uint(k)])));
+            cq[k] = ck;
+          }
+          col = dvec3(cq[0], cq[1], cq[2]);
+        }
         precise dvec3 fw = dvec3(double(nout[e * 7u + 4u]) * sigma, double(nout[e * 7u + 5u]) * sigma,
                                  double(nout[e * 7u + 6u]) * sigma);
         s_t = t; s_alpha = alpha;
@@ -355,7 +371,7 @@ layout(std430, binding = 0) readonly buffer E { double entry[]; };
 layout(std430, binding = 1) readonly buffer C { uint entry_count[]; };
 layout(std430, binding = 2) readonly buffer W { float wt[]; };
 layout(std430, binding = 3) writeonly buffer O { float nout[]; };
-layout(std430, binding = 4) readonly buffer NP { double np[]; };  // lo, size, centroid, tau_lo, tau_hi, log2(tau_hi / tau_lo)
+layout(std430, binding = 4) readonly buffer NP { double np[]; };  // lo, size, centroid, tau_lo, tau_hi, log2(tau_hi / tau_lo), fade power
 layout(std430, binding = 5) readonly buffer RS { uint res[]; };
 layout(push_constant) uniform P {
   uint pixels; uint slots; uint levels; uint table; uint hidden; uint inputs; uint w1; uint b1; uint w2; uint b2; uint w3; uint b3;
@@ -432,7 +448,9 @@ void main() {
       b += wf * wt[idx + 1u];
     }
     precise double fade = 2.0LF / (double(r) * qsigma);
-    float mask = float(min(1.0LF, fade * fade));
+    precise double fade2 = fade * fade;
+    precise double fade4 = fade2 * fade2;
+    float mask = float(min(1.0LF, np[10] == 2.0LF ? fade2 : fade4));
     precise float fa = mask * a;
     precise float fb = mask * b;
     features[2u * l] = fa;
@@ -494,13 +512,14 @@ Result<std::array<std::uint32_t, 12>> CompositePass::upload_neural(const NeuralD
   const std::size_t w1 = std::size_t{n.levels} * table * 2, b1 = w1 + h * ni, w2 = b1 + h, b2 = w2 + h * h, w3 = b2 + h,
                     b3 = w3 + 7 * h;
   if (n.params.size() != b3 + 7) return Status::input("vulkan composite: the neural field's parameters do not match its architecture");
-  const double np[10] = {n.lo.x, n.lo.y, n.lo.z, n.size, n.centroid.x, n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range};
+  const double np[11] = {n.lo.x,   n.lo.y,   n.lo.z,       n.size,        n.centroid.x,
+                         n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range, static_cast<double>(n.fade_power)};
   const auto put = [&](std::size_t which, auto span) -> Status {
     R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
     return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);
   };
   R1_TRY(put(11, std::span<const float>(n.params)));
-  R1_TRY(put(12, std::span<const double>(np, 10)));
+  R1_TRY(put(12, std::span<const double>(np, 11)));
   R1_TRY(put(13, std::span<const std::uint32_t>(n.resolution)));
   const auto u32 = [](std::size_t v) { return static_cast<std::uint32_t>(v); };
   return std::array<std::uint32_t, 12>{0, slots, n.levels, u32(table), n.hidden, u32(ni), u32(w1), u32(b1), u32(w2), u32(b2), u32(w3), u32(b3)};
@@ -549,7 +568,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
                       top_ptr = append(field.top_ptr), top = append(field.top), splat_ptr = append(splats.tile_ptr),
                       splat_list = append(splats.tile), next = append(field.next), parent = append(field.parent);
   if (idx.empty()) idx.push_back(0);
-  std::vector<double> prm(44, 0.0);
+  std::vector<double> prm(56, 0.0);
   const double camera[13] = {cam.position.x, cam.position.y, cam.position.z, cam.right.x, cam.right.y, cam.right.z, cam.up.x,
                              cam.up.y,       cam.up.z,       cam.forward.x, cam.forward.y, cam.forward.z, cam.focal_px};
   std::copy(camera, camera + 13, prm.begin());
@@ -574,6 +593,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
     prm[37] = nd->kappa;
     prm[38] = nd->prior_mass, prm[39] = nd->prior_s2;
     prm[40] = nd->centroid.x, prm[41] = nd->centroid.y, prm[42] = nd->centroid.z;
+    std::copy(nd->prior_colour.begin(), nd->prior_colour.end(), prm.begin() + 43);
   }
   R1_TRY(ensure_write(6, std::span<const double>(prm)));
   // Bands of rows whose opaque layer and results fit one storage buffer each, and with the neural

@@ -87,10 +87,11 @@ void locate(const NeuralField& f, const Query& q, const Location& e) {
       e.index[l * 8 + c] = (l * table + corner_index(i0[0] + dx, i0[1] + dy, i0[2] + dz, res, table)) * kNeuralFeatures;
       e.weight[l * 8 + c] = static_cast<float>(w);
     }
-    // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, (2 h / sigma)^2) for cells
+    // Levels finer than the kernel fade out (R1-NRF-002): weight min(1, (2 h / sigma)^4) for cells
     // of side h, so a wide kernel reads only the coarse levels that can hold its smooth field.
     const double fade = 2.0 / (res * q.sigma);
-    e.mask[l] = static_cast<float>(std::min(1.0, fade * fade));
+    const double fade2 = fade * fade;
+    e.mask[l] = static_cast<float>(std::min(1.0, f.fade_power == 2 ? fade2 : fade2 * fade2));
   }
 }
 
@@ -129,17 +130,30 @@ void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
 // What the heads mean (R1-NRF-004, R1-NRF-007): the kernel sum exp(o0) times the Gaussian prior
 // at (x, sigma) (a field without a prior: expm1(softplus(o0))), colour 3 sigmoid(o1..3) (linear
 // light times brightness, at most 3), flow sigma o4..6.
-FieldValue decode_outputs(const NeuralField& f, const float* o, const Vec3& x, double sigma) {
+}  // namespace
+
+FieldValue decode_neural_outputs(const NeuralField& f, const float* o, const Vec3& x, double sigma) {
   FieldValue v;
   // Without a prior, expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one
   // rounding a device repeats), and expm1(o0) where softplus is o0.
   const double o0 = static_cast<double>(o[0]);
   v.weight = f.prior_mass > 0 ? std::exp(o0) * f.prior(x, sigma) : o0 > 30 ? std::expm1(o0) : std::exp(o0);
   v.density = f.kappa / sigma * v.weight;
-  v.color = Vec3{3 * sigmoid(static_cast<double>(o[1])), 3 * sigmoid(static_cast<double>(o[2])), 3 * sigmoid(static_cast<double>(o[3]))};
+  if (f.prior_mass > 0) {
+    // 3 sigmoid(o + logit(q)) for the prior's colour q (R1-NRF-008), as 3 q / (q + (1 - q) e^-o).
+    const Vec3 q = f.colour_prior(x, sigma);
+    const double qs[3] = {q.x, q.y, q.z};
+    double c[3];
+    for (int k = 0; k < 3; ++k) c[k] = 3 * qs[k] / (qs[k] + (1 - qs[k]) * std::exp(-static_cast<double>(o[1 + k])));
+    v.color = Vec3{c[0], c[1], c[2]};
+  } else {
+    v.color = Vec3{3 * sigmoid(static_cast<double>(o[1])), 3 * sigmoid(static_cast<double>(o[2])), 3 * sigmoid(static_cast<double>(o[3]))};
+  }
   v.flow = Vec3{static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
   return v;
 }
+
+namespace {
 
 // A training point: the query and the analytic field's targets in the heads' units.
 struct Sample {
@@ -147,6 +161,7 @@ struct Sample {
   float target[kNeuralOutputs];  // log1p(kernel sum), colour, flow / sigma
   float weight_cf = 0;           // weight of the colour and flow terms: min(1, kernel sum)
   double prior = 1;              // the prior's kernel sum at the point (R1-NRF-007)
+  double colour_logit[3] = {};   // logit of the prior's colour over 3 (R1-NRF-008)
 };
 
 double gaussian(std::uint64_t seed, std::uint64_t item, std::uint64_t dim) {
@@ -222,6 +237,18 @@ std::vector<float> input_major(const std::vector<float>& w, std::uint32_t no, st
 
 }  // namespace
 
+Vec3 NeuralField::colour_prior(const Vec3& x, double sigma) const {
+  const double v = sigma * sigma + prior_s2;
+  const double d[3] = {x.x - centroid.x, x.y - centroid.y, x.z - centroid.z};
+  const double mean[3] = {prior_colour.x, prior_colour.y, prior_colour.z};
+  double q[3];
+  for (int k = 0; k < 3; ++k) {
+    const double g = (prior_gradient[3 * k] * d[0] + prior_gradient[3 * k + 1] * d[1]) + prior_gradient[3 * k + 2] * d[2];
+    q[k] = std::clamp((mean[k] + g / v) / 3.0, 1e-3, 1 - 1e-3);
+  }
+  return Vec3{q[0], q[1], q[2]};
+}
+
 // The order of operations a device repeats (R1-NRF-007).
 double NeuralField::prior(const Vec3& x, double sigma) const {
   if (!(prior_mass > 0)) return 1.0;
@@ -257,7 +284,7 @@ FieldValue NeuralInference::evaluate(const Vec3& x, double sigma) const {
   infer_layer(features.data(), f.inputs(), w1t_.data(), f.b1.data(), f.config.hidden, false, h1.data());
   infer_layer(h1.data(), f.config.hidden, w2t_.data(), f.b2.data(), f.config.hidden, false, h2.data());
   infer_layer(h2.data(), f.config.hidden, w3t_.data(), f.b3.data(), kNeuralOutputs, true, o);
-  return decode_outputs(f, o, x, sigma);
+  return decode_neural_outputs(f, o, x, sigma);
 }
 
 FieldValue NeuralField::evaluate(const Vec3& x, double sigma) const { return NeuralInference(*this).evaluate(x, sigma); }
@@ -303,6 +330,21 @@ NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed
   }
   f.prior_mass = mass;
   f.prior_s2 = mass > 0 ? spread / (3 * mass) : 0.0;
+  // Its colour (R1-NRF-008): the weighted mean and the colour's covariance with position.
+  if (mass > 0) {
+    Vec3 cm;
+    for (std::uint32_t p = 0; p < s.n; ++p) cm += s.color[p] * (static_cast<double>(s.n) * s.phi[p] / mass);
+    std::array<double, 9> g{};
+    for (std::uint32_t p = 0; p < s.n; ++p) {
+      const double wp = static_cast<double>(s.n) * s.phi[p] / mass;
+      const Vec3 dc = s.color[p] - cm, dx = s.position[p] - s.centroid;
+      const double c3[3] = {dc.x, dc.y, dc.z}, x3[3] = {dx.x, dx.y, dx.z};
+      for (int k = 0; k < 3; ++k)
+        for (int a = 0; a < 3; ++a) g[3 * k + a] += wp * c3[k] * x3[a];
+    }
+    f.prior_colour = cm;
+    f.prior_gradient = g;
+  }
   f.tau_hi = std::max(16.0 * f.tau_lo, (kPointMass * extent) * (kPointMass * extent));
   const double margin = 3 * std::sqrt(f.tau_hi);
   f.size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 2 * margin;
@@ -369,6 +411,12 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
       Sample& smp = set[k];
       smp.q = make_query(f, x, sigma);
       smp.prior = f.prior(x, sigma);
+      if (f.prior_mass > 0) {
+        const Vec3 q = f.colour_prior(x, sigma);
+        smp.colour_logit[0] = std::log(q.x / (1 - q.x));
+        smp.colour_logit[1] = std::log(q.y / (1 - q.y));
+        smp.colour_logit[2] = std::log(q.z / (1 - q.z));
+      }
       smp.target[0] = static_cast<float>(std::log1p(v.weight));
       smp.target[1] = static_cast<float>(v.color.x / 3);
       smp.target[2] = static_cast<float>(v.color.y / 3);
@@ -410,7 +458,7 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
       f.b3[0] = f.prior_mass > 0 ? 0.0f : static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
       for (std::uint32_t k = 1; k <= 3; ++k) {
         const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
-        f.b3[k] = static_cast<float>(std::log(m / (1 - m)));
+        f.b3[k] = f.prior_mass > 0 ? 0.0f : static_cast<float>(std::log(m / (1 - m)));
       }
       for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mean[k]);
     }
@@ -499,7 +547,7 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
         double loss = head_weight[0] * r0 * r0;
         dO(r, 0) = static_cast<float>(2 * head_weight[0] * r0 * (wh / (1 + wh)) * scale);
         for (int k = 1; k <= 3; ++k) {
-          const double sg = sigmoid(static_cast<double>(O(r, k)));
+          const double sg = sigmoid(static_cast<double>(O(r, k)) + smp.colour_logit[k - 1]);
           const double d = sg - static_cast<double>(smp.target[k]);
           const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
           loss += wk * d * d;
@@ -687,6 +735,8 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
     format::put_f64(out, v);
   format::put_f64(out, f.prior_mass);
   format::put_f64(out, f.prior_s2);
+  for (const double v : {f.prior_colour.x, f.prior_colour.y, f.prior_colour.z}) format::put_f64(out, v);
+  for (const double v : f.prior_gradient) format::put_f64(out, v);
   for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
   format::put_bytes(out, d);
@@ -732,10 +782,16 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
     for (double* v : {&f.update_lo.x, &f.update_lo.y, &f.update_lo.z, &f.update_hi.x, &f.update_hi.y, &f.update_hi.z})
       if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad update box");
   }
+  f.fade_power = 2;
   if (!v1 && !v2) {
+    f.fade_power = 4;
     if (!r.f64(f.prior_mass) || !r.f64(f.prior_s2)) return r.error("truncated");
     if (!(f.prior_mass >= 0) || !(f.prior_s2 >= 0) || !std::isfinite(f.prior_mass) || !std::isfinite(f.prior_s2))
       return r.error("bad prior");
+    for (double* v : {&f.prior_colour.x, &f.prior_colour.y, &f.prior_colour.z})
+      if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad prior");
+    for (double& v : f.prior_gradient)
+      if (!r.f64(v) || !std::isfinite(v)) return r.error("bad prior");
   }
   const std::uint32_t ni = f.inputs(), nh = c.hidden;
   const std::size_t sizes[7] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,

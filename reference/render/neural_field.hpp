@@ -44,10 +44,15 @@ struct NeuralField {
   double tau_lo = 1, tau_hi = 1;          // the trained tau range (R1-NRF-001, R1-NRF-005)
   double kappa = 0.25;                    // R1-RND-052's density gain
   double prior_mass = 0, prior_s2 = 0;    // the Gaussian prior (R1-NRF-007); mass 0: none
+  Vec3 prior_colour;                      // its mean colour and the colour's covariance with
+  std::array<double, 9> prior_gradient{}; // position (channel k, axis a at 3 k + a; R1-NRF-008)
   // The prior's kernel sum at (x, sigma): the scene as one isotropic Gaussian of its mass and
   // spread about the centroid; 1 when the field has none.
   double prior(const Vec3& x, double sigma) const;
+  // The prior's colour at (x, sigma) over 3 (R1-NRF-008), each channel in [1e-3, 1 - 1e-3].
+  Vec3 colour_prior(const Vec3& x, double sigma) const;
   std::uint64_t seed = 0;                 // R1-NRF-020
+  std::uint32_t fade_power = 4;           // the fine levels' fade exponent: 4, 2 in files before version 3
   std::vector<float> grid;                // levels x 2^log2_table x 2
   std::vector<float> w1, b1, w2, b2, w3, b3;  // row-major: w1 is hidden x inputs
   double loss_first = 0, loss_last = 0;   // mean training loss of the first and last step
@@ -75,6 +80,10 @@ class NeuralInference {
   const NeuralField& f_;
   std::vector<float> w1t_, w2t_, w3t_;  // w[j][i] at [i * outputs + j]
 };
+
+// The field's value from the network's 7 raw outputs at (x, sigma) (R1-NRF-004, 007, 008): what
+// a device that runs the layers itself decodes them to.
+FieldValue decode_neural_outputs(const NeuralField& f, const float* outputs, const Vec3& x, double sigma);
 
 // The training seed (R1-NRF-020): the first 8 bytes of Hemera(snapshot digest || "nrf").
 std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest);
