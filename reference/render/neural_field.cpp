@@ -127,11 +127,12 @@ void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
   O = (H2 * W3.transpose()).rowwise() + B3;
 }
 
-// What the heads mean (R1-NRF-004, R1-NRF-007): the kernel sum exp(o0) times the Gaussian prior
-// at (x, sigma) (a field without a prior: expm1(softplus(o0))), colour 3 sigmoid(o1..3) (linear
-// light times brightness, at most 3), flow sigma o4..6.
 }  // namespace
 
+// What the heads mean (R1-NRF-004, 007, 008): the kernel sum exp(o0) times the Gaussian prior at
+// (x, sigma), colour 3 sigmoid(o1..3 + logit(the prior's colour / 3)) (linear light times
+// brightness, at most 3), flow sigma o4..6; a field without a prior: expm1(softplus(o0)) and
+// 3 sigmoid(o1..3).
 FieldValue decode_neural_outputs(const NeuralField& f, const float* o, const Vec3& x, double sigma) {
   FieldValue v;
   // Without a prior, expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one
@@ -737,6 +738,7 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
   format::put_f64(out, f.prior_s2);
   for (const double v : {f.prior_colour.x, f.prior_colour.y, f.prior_colour.z}) format::put_f64(out, v);
   for (const double v : f.prior_gradient) format::put_f64(out, v);
+  format::put_u32(out, f.fade_power);
   for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
   format::put_bytes(out, d);
@@ -784,7 +786,6 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
   }
   f.fade_power = 2;
   if (!v1 && !v2) {
-    f.fade_power = 4;
     if (!r.f64(f.prior_mass) || !r.f64(f.prior_s2)) return r.error("truncated");
     if (!(f.prior_mass >= 0) || !(f.prior_s2 >= 0) || !std::isfinite(f.prior_mass) || !std::isfinite(f.prior_s2))
       return r.error("bad prior");
@@ -792,6 +793,8 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
       if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad prior");
     for (double& v : f.prior_gradient)
       if (!r.f64(v) || !std::isfinite(v)) return r.error("bad prior");
+    if (!r.u32(f.fade_power)) return r.error("truncated");
+    if (f.fade_power != 2 && f.fade_power != 4) return r.error("bad fade power (2 or 4)");
   }
   const std::uint32_t ni = f.inputs(), nh = c.hidden;
   const std::size_t sizes[7] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,

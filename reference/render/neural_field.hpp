@@ -52,7 +52,7 @@ struct NeuralField {
   // The prior's colour at (x, sigma) over 3 (R1-NRF-008), each channel in [1e-3, 1 - 1e-3].
   Vec3 colour_prior(const Vec3& x, double sigma) const;
   std::uint64_t seed = 0;                 // R1-NRF-020
-  std::uint32_t fade_power = 4;           // the fine levels' fade exponent: 4, 2 in files before version 3
+  std::uint32_t fade_power = 4;           // the fine levels' fade exponent: 4 (2 in fields before version 3)
   std::vector<float> grid;                // levels x 2^log2_table x 2
   std::vector<float> w1, b1, w2, b2, w3, b3;  // row-major: w1 is hidden x inputs
   double loss_first = 0, loss_last = 0;   // mean training loss of the first and last step

@@ -42,6 +42,13 @@ NeuralConfig small_config() {
   return c;
 }
 
+// A field of scene s trained with small_config() for `steps` Adam steps.
+r1::Result<NeuralField> train_small(const Scene& s, std::uint32_t steps, std::uint64_t seed) {
+  NeuralConfig c = small_config();
+  c.steps = steps;
+  return train_neural_field(s, c, seed);
+}
+
 std::span<const std::uint8_t> digest_of(const r1::Epoch& e) { return e.snapshot_digest; }
 
 TEST(NeuralField, TrainingIsTheSameBytesOnOneThreadAndOnAll) {
@@ -107,15 +114,14 @@ TEST(NeuralField, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
 }
 
 // R1-NRF-007, 008: the prior is the scene as one Gaussian of its far-field mass (n phi summed) and
-// its spread about the centroid, with its mean colour and the colour's gradient. For kernels much wider than the scene it is the analytic far field
-// itself up to terms in (s / sigma)^4 and the hierarchy's own approximation: within 3% at 4 and
-// 8 sigma_hi (measured: 1.9%). A mass off by 5% or a spread off by a factor 3 (5.5%) fails it.
+// its spread about the centroid, with its mean colour and the colour's gradient. For kernels much
+// wider than the scene its kernel sum is the analytic far field's up to terms in (s / sigma)^4 and
+// the hierarchy's own approximation: within 3% at 4 and 8 sigma_hi (measured: 1.9%). A mass off
+// by 5% or a spread off by a factor 3 (5.5%) fails it.
 TEST(NeuralField, ThePriorIsTheScenesMomentsGaussian) {
   const r1::Epoch e = blob_epoch(400);
   const Scene s = make_scene(e);
-  NeuralConfig c = small_config();
-  c.steps = 2;
-  auto f = train_neural_field(s, c, 5);
+  auto f = train_small(s, 2, 5);
   ASSERT_TRUE(f.is_ok()) << f.status().message();
   double mass = 0;
   for (const double phi : s.phi) mass += static_cast<double>(s.n) * phi;
@@ -181,9 +187,8 @@ TEST(NeuralField, AFarViewsFringeFollowsTheAnalyticField) {
 TEST(NeuralField, LocalUpdateStepsOnlyTheCellsOfItsBox) {
   r1::Epoch e = blob_epoch(400);
   const Scene before = make_scene(e);
-  NeuralConfig c = small_config();
-  c.steps = 60;
-  auto prev = train_neural_field(before, c, 3);
+  const NeuralConfig c = small_config();
+  auto prev = train_small(before, 60, 3);
   ASSERT_TRUE(prev.is_ok());
   // Move the first blob's particles (every fourth) 120 units along x.
   for (std::size_t p = 0; p < e.frame.position.size(); p += 4)
@@ -262,9 +267,7 @@ TEST(NeuralField, LocalUpdateStepsOnlyTheCellsOfItsBox) {
 TEST(NeuralField, FileRoundTripsAndRejectsDamage) {
   const r1::Epoch e = blob_epoch(200);
   const Scene s = make_scene(e);
-  NeuralConfig c = small_config();
-  c.steps = 5;
-  auto f = train_neural_field(s, c, 1);
+  auto f = train_small(s, 5, 1);
   ASSERT_TRUE(f.is_ok());
   const std::string bytes = encode_neural_field(*f, digest_of(e));
   auto back = decode_neural_field(bytes, "field.nrf", digest_of(e));
@@ -290,6 +293,17 @@ TEST(NeuralField, FileRoundTripsAndRejectsDamage) {
   auto neg = decode_neural_field(encode_neural_field(bad, digest_of(e)), "field.nrf", digest_of(e));
   ASSERT_FALSE(neg.is_ok());
   EXPECT_NE(neg.status().message().find("prior"), std::string::npos);
+  // A field of version 2 updated locally keeps its square fade through the file (R1-NRF-002);
+  // another power is refused.
+  NeuralField square = *f;
+  square.fade_power = 2;
+  auto kept = decode_neural_field(encode_neural_field(square, digest_of(e)), "field.nrf", digest_of(e));
+  ASSERT_TRUE(kept.is_ok()) << kept.status().message();
+  EXPECT_EQ(kept->fade_power, 2u);
+  const double wide = std::sqrt(f->tau_hi);
+  EXPECT_NE(kept->evaluate(x, wide).density, f->evaluate(x, wide).density);
+  square.fade_power = 3;
+  EXPECT_FALSE(decode_neural_field(encode_neural_field(square, digest_of(e)), "field.nrf", digest_of(e)).is_ok());
 }
 
 }  // namespace
