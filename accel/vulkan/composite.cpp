@@ -243,8 +243,8 @@ void main() {
           continue;
         }
         // The heads (R1-NRF-004): kernel sum exp(o0) times the Gaussian prior (R1-NRF-007; without
-        // one, expm1(softplus(o0))), density kappa / sigma times it, colour 3 sigmoid(o1..3), flow
-        // sigma o4..6.
+        // one, expm1(softplus(o0))), density kappa / sigma times it, colour 3 sigmoid(o1..3) (with
+        // the colour prior below, R1-NRF-008), flow sigma o4..6.
         double o0 = double(nout[e * 7u]);
         precise double w = o0 > 30.0LF ? det_exp(o0) - 1.0LF : det_exp(o0);
         if (prm[38] > 0.0LF) {
@@ -512,8 +512,9 @@ Result<std::array<std::uint32_t, 12>> CompositePass::upload_neural(const NeuralD
   const std::size_t w1 = std::size_t{n.levels} * table * 2, b1 = w1 + h * ni, w2 = b1 + h, b2 = w2 + h * h, w3 = b2 + h,
                     b3 = w3 + 7 * h;
   if (n.params.size() != b3 + 7) return Status::input("vulkan composite: the neural field's parameters do not match its architecture");
-  const double np[11] = {n.lo.x,   n.lo.y,   n.lo.z,       n.size,        n.centroid.x,
-                         n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range, static_cast<double>(n.fade_power)};
+  const double np[11] = {n.lo.x,       n.lo.y,   n.lo.z,   n.size,       n.centroid.x,
+                         n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range,
+                         static_cast<double>(n.fade_power)};
   const auto put = [&](std::size_t which, auto span) -> Status {
     R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
     return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);

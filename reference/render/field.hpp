@@ -29,13 +29,13 @@ struct NodeField {
   double extent = 0;
 };
 
+class NeuralInference;
+
 // What the field of one frame depends on (R1-RND-059). Nodes are classified from the top by
 // far_class: a kFar node's members all have weight exactly 1 x n phi, so its aggregates are the
 // scene's (NodeData, computed once per epoch) and nothing below it is visited; a kBehind node
 // weighs 0; only kMixed nodes get aggregates of their own, computed over their members. A pure
 // far view therefore costs the top of the hierarchy, not |P|.
-class NeuralInference;
-
 struct FieldFrame {
   static constexpr std::uint32_t kFarSlot = 0xFFFFFFFFu, kBehindSlot = 0xFFFFFFFEu;
   const Scene* scene = nullptr;
