@@ -242,11 +242,13 @@ void main() {
           entry[e * 4u] = xs.x; entry[e * 4u + 1u] = xs.y; entry[e * 4u + 2u] = xs.z; entry[e * 4u + 3u] = sigma;
           continue;
         }
-        // The heads (R1-NRF-004): kernel sum exp(o0) times the Gaussian prior (R1-NRF-007; without
-        // one, expm1(softplus(o0))), density kappa / sigma times it, colour 3 sigmoid(o1..3) (with
-        // the colour prior below, R1-NRF-008), flow sigma o4..6.
+        // The heads (R1-NRF-004): kernel sum exp(o0) times the Gaussian prior (R1-NRF-007), density
+        // kappa / sigma times it, colour 3 sigmoid(o + logit(q)) for the prior's colour q, as
+        // 3 q / (q + (1 - q) e^-o) (R1-NRF-008), flow sigma o4..6. Without the priors (files before
+        // version 3): expm1(softplus(o0)) and 3 sigmoid(o1..3).
         double o0 = double(nout[e * 7u]);
-        precise double w = o0 > 30.0LF ? det_exp(o0) - 1.0LF : det_exp(o0);
+        precise double w;
+        precise dvec3 col;
         if (prm[38] > 0.0LF) {
           precise double s2 = sigma * sigma;
           precise double v = s2 + prm[39];
@@ -256,31 +258,25 @@ void main() {
           precise double dz = xs.z - prm[42];
           precise double q = (dx * dx + dy * dy + dz * dz) / (2.0LF * v);
           precise double prior = prm[38] * r * sqrt(r) * det_exp(-q);
-          precise double wp = det_exp(o0) * prior;
-          w = wp;
-        }
-        if (!(w > 0.0LF)) continue;
-        precise double density = prm[37] / sigma * w;
-        precise double alpha = 1.0LF - det_exp(-density * delta);
-        precise dvec3 col = dvec3(3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 1u])))),
-                                  3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 2u])))),
-                                  3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 3u])))));
-        if (prm[38] > 0.0LF) {
-          // 3 sigmoid(o + logit(q)) for the prior's colour q (R1-NRF-008): 3 q / (q + (1 - q) e^-o).
-          precise double v = sigma * sigma + prm[39];
-          precise double dx = xs.x - prm[40];
-          precise double dy = xs.y - prm[41];
-          precise double dz = xs.z - prm[42];
+          w = det_exp(o0) * prior;
           double cq[3];
           for (int k = 0; k < 3; ++k) {
             precise double g = (prm[46 + 3 * k] * dx + prm[47 + 3 * k] * dy) + prm[48 + 3 * k] * dz;
             precise double q0 = (prm[43 + k] + g / v) / 3.0LF;
-            double q = clamp(q0, 1e-3LF, 1.0LF - 1e-3LF);
-            precise double ck = 3.0LF * q / (q + (1.0LF - q) * det_exp(-double(nout[e * 7u + 1u + uint(k)])));
+            double qk = clamp(q0, 1e-3LF, 1.0LF - 1e-3LF);
+            precise double ck = 3.0LF * qk / (qk + (1.0LF - qk) * det_exp(-double(nout[e * 7u + 1u + uint(k)])));
             cq[k] = ck;
           }
           col = dvec3(cq[0], cq[1], cq[2]);
+        } else {
+          w = o0 > 30.0LF ? det_exp(o0) - 1.0LF : det_exp(o0);
+          col = dvec3(3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 1u])))),
+                      3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 2u])))),
+                      3.0LF * (1.0LF / (1.0LF + det_exp(-double(nout[e * 7u + 3u])))));
         }
+        if (!(w > 0.0LF)) continue;
+        precise double density = prm[37] / sigma * w;
+        precise double alpha = 1.0LF - det_exp(-density * delta);
         precise dvec3 fw = dvec3(double(nout[e * 7u + 4u]) * sigma, double(nout[e * 7u + 5u]) * sigma,
                                  double(nout[e * 7u + 6u]) * sigma);
         s_t = t; s_alpha = alpha;

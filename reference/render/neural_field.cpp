@@ -135,12 +135,9 @@ void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
 // 3 sigmoid(o1..3).
 FieldValue decode_neural_outputs(const NeuralField& f, const float* o, const Vec3& x, double sigma) {
   FieldValue v;
-  // Without a prior, expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one
-  // rounding a device repeats), and expm1(o0) where softplus is o0.
   const double o0 = static_cast<double>(o[0]);
-  v.weight = f.prior_mass > 0 ? std::exp(o0) * f.prior(x, sigma) : o0 > 30 ? std::expm1(o0) : std::exp(o0);
-  v.density = f.kappa / sigma * v.weight;
   if (f.prior_mass > 0) {
+    v.weight = std::exp(o0) * f.prior(x, sigma);
     // 3 sigmoid(o + logit(q)) for the prior's colour q (R1-NRF-008), as 3 q / (q + (1 - q) e^-o).
     const Vec3 q = f.colour_prior(x, sigma);
     const double qs[3] = {q.x, q.y, q.z};
@@ -148,8 +145,12 @@ FieldValue decode_neural_outputs(const NeuralField& f, const float* o, const Vec
     for (int k = 0; k < 3; ++k) c[k] = 3 * qs[k] / (qs[k] + (1 - qs[k]) * std::exp(-static_cast<double>(o[1 + k])));
     v.color = Vec3{c[0], c[1], c[2]};
   } else {
+    // expm1(softplus(o0)) is exp(o0) where softplus is log1p(exp(o0)) (the one rounding a device
+    // repeats), and expm1(o0) where softplus is o0.
+    v.weight = o0 > 30 ? std::expm1(o0) : std::exp(o0);
     v.color = Vec3{3 * sigmoid(static_cast<double>(o[1])), 3 * sigmoid(static_cast<double>(o[2])), 3 * sigmoid(static_cast<double>(o[3]))};
   }
+  v.density = f.kappa / sigma * v.weight;
   v.flow = Vec3{static_cast<double>(o[4]) * sigma, static_cast<double>(o[5]) * sigma, static_cast<double>(o[6]) * sigma};
   return v;
 }
