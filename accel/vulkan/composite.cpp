@@ -249,20 +249,39 @@ void main() {
         double o0 = double(nout[e * 7u]);
         precise double w;
         precise dvec3 col;
-        if (prm[38] > 0.0LF) {
+        uint parts = uint(prm[38]);
+        if (parts > 0u) {
+          // The prior's parts in order, one exp each (NeuralField::prior_at): kernel sum and
+          // colour, the nearest part's colour where every part's sum underflows.
           precise double s2 = sigma * sigma;
-          precise double v = s2 + prm[39];
-          precise double r = s2 / v;
-          precise double dx = xs.x - prm[40];
-          precise double dy = xs.y - prm[41];
-          precise double dz = xs.z - prm[42];
-          precise double q = (dx * dx + dy * dy + dz * dz) / (2.0LF * v);
-          precise double prior = prm[38] * r * sqrt(r) * det_exp(-q);
-          w = det_exp(o0) * prior;
+          precise double sum = 0.0LF;
+          precise dvec3 num = dvec3(0.0LF);
+          dvec3 nearest = dvec3(0.0LF);
+          double q_min = inf();
+          for (uint k = 0u; k < parts; ++k) {
+            uint pb = 56u + 17u * k;
+            precise double v = s2 + prm[pb + 1u];
+            precise double r = s2 / v;
+            precise double dx = xs.x - prm[pb + 2u];
+            precise double dy = xs.y - prm[pb + 3u];
+            precise double dz = xs.z - prm[pb + 4u];
+            precise double q = (dx * dx + dy * dy + dz * dz) / (2.0LF * v);
+            precise double ek = prm[pb] * r * sqrt(r) * det_exp(-q);
+            sum += ek;
+            double ck[3];
+            for (uint c = 0u; c < 3u; ++c) {
+              precise double g = (prm[pb + 8u + 3u * c] * dx + prm[pb + 9u + 3u * c] * dy) + prm[pb + 10u + 3u * c] * dz;
+              precise double m = prm[pb + 5u + c] + g / v;
+              ck[c] = m;
+            }
+            precise dvec3 cv = dvec3(ck[0], ck[1], ck[2]);
+            num = dvec3(num.x + ek * cv.x, num.y + ek * cv.y, num.z + ek * cv.z);
+            if (q < q_min) { q_min = q; nearest = cv; }
+          }
+          w = det_exp(o0) * sum;
           double cq[3];
           for (int k = 0; k < 3; ++k) {
-            precise double g = (prm[46 + 3 * k] * dx + prm[47 + 3 * k] * dy) + prm[48 + 3 * k] * dz;
-            precise double q0 = (prm[43 + k] + g / v) / 3.0LF;
+            precise double q0 = (sum > 0.0LF ? num[k] / sum : nearest[k]) / 3.0LF;
             double qk = clamp(q0, 1e-3LF, 1.0LF - 1e-3LF);
             precise double ck = 3.0LF * qk / (qk + (1.0LF - qk) * det_exp(-double(nout[e * 7u + 1u + uint(k)])));
             cq[k] = ck;
@@ -588,9 +607,9 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   if (nd != nullptr) {
     R1_ASSIGN(infer_push, upload_neural(*nd, std::max<std::uint32_t>(field.samples, 1)));
     prm[37] = nd->kappa;
-    prm[38] = nd->prior_mass, prm[39] = nd->prior_s2;
-    prm[40] = nd->centroid.x, prm[41] = nd->centroid.y, prm[42] = nd->centroid.z;
-    std::copy(nd->prior_colour.begin(), nd->prior_colour.end(), prm.begin() + 43);
+    // The prior's parts from prm[56], 17 doubles each (R1-NRF-007, 008).
+    prm[38] = static_cast<double>(nd->prior.size() / 17);
+    prm.insert(prm.end(), nd->prior.begin(), nd->prior.end());
   }
   R1_TRY(ensure_write(6, std::span<const double>(prm)));
   // Bands of rows whose opaque layer and results fit one storage buffer each, and with the neural

@@ -187,9 +187,11 @@ vk::NeuralData neural_data(const render::NeuralField& f) {
   n.resolution = f.resolution;
   n.lo = f.lo, n.centroid = f.centroid;
   n.size = f.size, n.tau_lo = f.tau_lo, n.tau_hi = f.tau_hi, n.kappa = f.kappa;
-  n.prior_mass = f.prior_mass, n.prior_s2 = f.prior_s2;
-  n.prior_colour = {f.prior_colour.x, f.prior_colour.y, f.prior_colour.z};
-  std::copy(f.prior_gradient.begin(), f.prior_gradient.end(), n.prior_colour.begin() + 3);
+  for (const render::NeuralField::PriorPart& p : f.prior_parts) {
+    const double head[8] = {p.mass, p.s2, p.centroid.x, p.centroid.y, p.centroid.z, p.colour.x, p.colour.y, p.colour.z};
+    n.prior.insert(n.prior.end(), head, head + 8);
+    n.prior.insert(n.prior.end(), p.gradient.begin(), p.gradient.end());
+  }
   n.fade_power = f.fade_power;
   n.log2_range = f.tau_hi > f.tau_lo ? std::log2(f.tau_hi / f.tau_lo) : 0.0;
   n.params.reserve(f.grid.size() + f.w1.size() + f.b1.size() + f.w2.size() + f.b2.size() + f.w3.size() + f.b3.size());

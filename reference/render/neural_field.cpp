@@ -26,6 +26,8 @@ constexpr std::uint32_t kPrime1 = 2654435761u, kPrime2 = 805459861u;  // Mueller
 constexpr std::uint32_t kChunk = 64;  // samples per gradient chunk: the fixed reduction order
 constexpr double kPointMass = 1.0;  // sigma_hi / the scene's extent about its centroid (R1-NRF-001)
 constexpr double kCellsPerSigma = 0.5;  // finest level: a cell per two sigma_min (R1-NRF-002)
+constexpr std::uint32_t kPriorCells = 4;  // the prior's grid: cells per side of the particles' box (R1-NRF-007)
+constexpr double kLrFinal = 0.1;  // the Adam steps decay geometrically to this fraction of the first (R1-NRF-011)
 
 // The entry of grid corner (x, y, z) at a level of `res` cells per side (R1-NRF-002): dense when
 // the (res + 1)^3 corners fit the table, else the spatial hash.
@@ -136,10 +138,11 @@ void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
 FieldValue decode_neural_outputs(const NeuralField& f, const float* o, const Vec3& x, double sigma) {
   FieldValue v;
   const double o0 = static_cast<double>(o[0]);
-  if (f.prior_mass > 0) {
-    v.weight = std::exp(o0) * f.prior(x, sigma);
+  if (!f.prior_parts.empty()) {
+    const NeuralField::PriorValue pv = f.prior_at(x, sigma);
+    v.weight = std::exp(o0) * pv.weight;
     // 3 sigmoid(o + logit(q)) for the prior's colour q (R1-NRF-008), as 3 q / (q + (1 - q) e^-o).
-    const Vec3 q = f.colour_prior(x, sigma);
+    const Vec3 q = pv.colour;
     const double qs[3] = {q.x, q.y, q.z};
     double c[3];
     for (int k = 0; k < 3; ++k) c[k] = 3 * qs[k] / (qs[k] + (1 - qs[k]) * std::exp(-static_cast<double>(o[1 + k])));
@@ -251,28 +254,43 @@ std::vector<float> input_major(const std::vector<float>& w, std::uint32_t no, st
 
 }  // namespace
 
-Vec3 NeuralField::colour_prior(const Vec3& x, double sigma) const {
-  const double v = sigma * sigma + prior_s2;
-  const double d[3] = {x.x - centroid.x, x.y - centroid.y, x.z - centroid.z};
-  const double mean[3] = {prior_colour.x, prior_colour.y, prior_colour.z};
-  double q[3];
-  for (int k = 0; k < 3; ++k) {
-    const double g = (prior_gradient[3 * k] * d[0] + prior_gradient[3 * k + 1] * d[1]) + prior_gradient[3 * k + 2] * d[2];
-    q[k] = std::clamp((mean[k] + g / v) / 3.0, 1e-3, 1 - 1e-3);
+// The order of operations a device repeats (R1-NRF-007, 008): one pass over the parts, one exp
+// each.
+NeuralField::PriorValue NeuralField::prior_at(const Vec3& x, double sigma) const {
+  PriorValue out;
+  if (prior_parts.empty()) return out;
+  const double s2 = sigma * sigma;
+  double sum = 0, num[3] = {0, 0, 0}, nearest[3] = {0, 0, 0};
+  double q_min = std::numeric_limits<double>::infinity();
+  for (const PriorPart& p : prior_parts) {
+    const double v = s2 + p.s2;
+    const double r = s2 / v;
+    const double d[3] = {x.x - p.centroid.x, x.y - p.centroid.y, x.z - p.centroid.z};
+    const double q = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / (2.0 * v);
+    const double e = p.mass * r * std::sqrt(r) * std::exp(-q);
+    sum += e;
+    const double mean[3] = {p.colour.x, p.colour.y, p.colour.z};
+    double c[3];
+    for (int k = 0; k < 3; ++k) {
+      const double g = (p.gradient[3 * k] * d[0] + p.gradient[3 * k + 1] * d[1]) + p.gradient[3 * k + 2] * d[2];
+      c[k] = mean[k] + g / v;
+      num[k] += e * c[k];
+    }
+    if (q < q_min) {
+      q_min = q;
+      std::copy(c, c + 3, nearest);
+    }
   }
-  return Vec3{q[0], q[1], q[2]};
+  out.weight = sum;
+  // Where every part's kernel sum underflows, the nearest part's colour.
+  double q3[3];
+  for (int k = 0; k < 3; ++k) q3[k] = std::clamp((sum > 0 ? num[k] / sum : nearest[k]) / 3.0, 1e-3, 1 - 1e-3);
+  out.colour = Vec3{q3[0], q3[1], q3[2]};
+  return out;
 }
 
-// The order of operations a device repeats (R1-NRF-007).
-double NeuralField::prior(const Vec3& x, double sigma) const {
-  if (!(prior_mass > 0)) return 1.0;
-  const double s2 = sigma * sigma;
-  const double v = s2 + prior_s2;
-  const double r = s2 / v;
-  const double dx = x.x - centroid.x, dy = x.y - centroid.y, dz = x.z - centroid.z;
-  const double q = (dx * dx + dy * dy + dz * dz) / (2.0 * v);
-  return prior_mass * r * std::sqrt(r) * std::exp(-q);
-}
+double NeuralField::prior(const Vec3& x, double sigma) const { return prior_at(x, sigma).weight; }
+Vec3 NeuralField::colour_prior(const Vec3& x, double sigma) const { return prior_at(x, sigma).colour; }
 
 NeuralInference::NeuralInference(const NeuralField& f)
     : f_(f),
@@ -318,6 +336,56 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
 
 namespace {
 
+// The Gaussian prior's parts (R1-NRF-007, 008): the particles grouped by the cell of a grid of g
+// cells per side over the box [lo, hi] (positions outside it in its border cells); per occupied
+// cell, in cell order, its far-field mass (every particle at weight n phi), weighted centroid and
+// spread per axis, mean colour and the colour's covariance with position, each summed in particle
+// order.
+std::vector<NeuralField::PriorPart> prior_parts_of(const Scene& s, std::uint32_t g, const Vec3& lo, const Vec3& hi) {
+  auto cell_of = [&](const Vec3& x) {
+    const double u[3] = {x.x - lo.x, x.y - lo.y, x.z - lo.z}, w[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    std::uint32_t i[3];
+    for (int k = 0; k < 3; ++k)
+      i[k] = w[k] > 0 ? std::min(g - 1, static_cast<std::uint32_t>(std::floor(std::clamp(u[k] / w[k], 0.0, 1.0) * g))) : 0;
+    return i[0] + g * (i[1] + g * i[2]);
+  };
+  std::vector<NeuralField::PriorPart> cells(std::size_t{g} * g * g);
+  std::vector<Vec3> weighted(cells.size());
+  std::vector<std::uint32_t> cell(s.n);
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    const double wp = static_cast<double>(s.n) * s.phi[p];
+    cell[p] = cell_of(s.position[p]);
+    cells[cell[p]].mass += wp;
+    weighted[cell[p]] += s.position[p] * wp;
+  }
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    if (cells[c].mass > 0) cells[c].centroid = weighted[c] * (1.0 / cells[c].mass);
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    NeuralField::PriorPart& part = cells[cell[p]];
+    if (!(part.mass > 0)) continue;
+    const double wp = static_cast<double>(s.n) * s.phi[p];
+    const Vec3 d = s.position[p] - part.centroid;
+    part.s2 += wp * (d.x * d.x + d.y * d.y + d.z * d.z);
+    part.colour += s.color[p] * (wp / part.mass);
+  }
+  for (std::uint32_t p = 0; p < s.n; ++p) {
+    NeuralField::PriorPart& part = cells[cell[p]];
+    if (!(part.mass > 0)) continue;
+    const double wp = static_cast<double>(s.n) * s.phi[p];
+    const Vec3 dc = s.color[p] - part.colour, dx = s.position[p] - part.centroid;
+    const double c3[3] = {dc.x, dc.y, dc.z}, x3[3] = {dx.x, dx.y, dx.z};
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) part.gradient[3 * k + a] += wp / part.mass * c3[k] * x3[a];
+  }
+  std::vector<NeuralField::PriorPart> parts;
+  for (NeuralField::PriorPart& part : cells) {
+    if (!(part.mass > 0)) continue;
+    part.s2 /= 3 * part.mass;
+    parts.push_back(part);
+  }
+  return parts;
+}
+
 // A new field for scene s: its cube, tau range and resolutions, and the parameters' initial values.
 NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed) {
   NeuralField f;
@@ -333,32 +401,10 @@ NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed
     lo = Vec3{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = Vec3{std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
-  // The Gaussian prior (R1-NRF-007): the far field's mass (every particle at weight n phi) and
-  // its spread about the centroid per axis, summed in particle order.
-  double mass = 0, spread = 0;
-  for (std::uint32_t p = 0; p < s.n; ++p) {
-    const double wp = static_cast<double>(s.n) * s.phi[p];
-    const Vec3 d = s.position[p] - s.centroid;
-    mass += wp;
-    spread += wp * (d.x * d.x + d.y * d.y + d.z * d.z);
-  }
-  f.prior_mass = mass;
-  f.prior_s2 = mass > 0 ? spread / (3 * mass) : 0.0;
-  // Its colour (R1-NRF-008): the weighted mean and the colour's covariance with position.
-  if (mass > 0) {
-    Vec3 cm;
-    for (std::uint32_t p = 0; p < s.n; ++p) cm += s.color[p] * (static_cast<double>(s.n) * s.phi[p] / mass);
-    std::array<double, 9> g{};
-    for (std::uint32_t p = 0; p < s.n; ++p) {
-      const double wp = static_cast<double>(s.n) * s.phi[p] / mass;
-      const Vec3 dc = s.color[p] - cm, dx = s.position[p] - s.centroid;
-      const double c3[3] = {dc.x, dc.y, dc.z}, x3[3] = {dx.x, dx.y, dx.z};
-      for (int k = 0; k < 3; ++k)
-        for (int a = 0; a < 3; ++a) g[3 * k + a] += wp * c3[k] * x3[a];
-    }
-    f.prior_colour = cm;
-    f.prior_gradient = g;
-  }
+  f.prior_cells = kPriorCells;
+  f.prior_lo = lo;
+  f.prior_hi = hi;
+  f.prior_parts = prior_parts_of(s, f.prior_cells, lo, hi);
   f.tau_hi = std::max(16.0 * f.tau_lo, (kPointMass * extent) * (kPointMass * extent));
   const double margin = 3 * std::sqrt(f.tau_hi);
   f.size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 2 * margin;
@@ -424,9 +470,10 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
       const FieldValue v = field_hierarchical(ff, x, sigma);
       Sample& smp = set[k];
       smp.q = make_query(f, x, sigma);
-      smp.prior = f.prior(x, sigma);
-      if (f.prior_mass > 0) {
-        const Vec3 q = f.colour_prior(x, sigma);
+      const NeuralField::PriorValue pv = f.prior_at(x, sigma);
+      smp.prior = pv.weight;
+      if (!f.prior_parts.empty()) {
+        const Vec3 q = pv.colour;
         smp.colour_logit[0] = std::log(q.x / (1 - q.x));
         smp.colour_logit[1] = std::log(q.y / (1 - q.y));
         smp.colour_logit[2] = std::log(q.z / (1 - q.z));
@@ -469,10 +516,10 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
     for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] = cw > 0 ? mean[k] / cw : 0.0;
     if (init_biases) {
       // With the prior the density head starts at the prior itself (o0 = 0).
-      f.b3[0] = f.prior_mass > 0 ? 0.0f : static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
+      f.b3[0] = !f.prior_parts.empty() ? 0.0f : static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
       for (std::uint32_t k = 1; k <= 3; ++k) {
         const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
-        f.b3[k] = f.prior_mass > 0 ? 0.0f : static_cast<float>(std::log(m / (1 - m)));
+        f.b3[k] = !f.prior_parts.empty() ? 0.0f : static_cast<float>(std::log(m / (1 - m)));
       }
       for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mean[k]);
     }
@@ -607,8 +654,10 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
     loss /= c.batch;
     if (step == 1) f.loss_first = loss;
     f.loss_last = loss;
-    adam_mlp.begin_step(step, c.lr_mlp);
-    adam_grid.begin_step(step, c.lr_grid);
+    // Step sizes decay geometrically from lr to kLrFinal lr over the steps (R1-NRF-011).
+    const double lr_scale = std::pow(kLrFinal, static_cast<double>(step - 1) / std::max(1u, c.steps - 1));
+    adam_mlp.begin_step(step, c.lr_mlp * lr_scale);
+    adam_grid.begin_step(step, c.lr_grid * lr_scale);
     // The MLP: every parameter's gradient summed over the chunks in chunk order, then its step.
     if (mlp) {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_mlp, 512), [&](const tbb::blocked_range<std::size_t>& range) {
@@ -709,6 +758,9 @@ Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev,
   if (!(b_lo.x < b_hi.x && b_lo.y < b_hi.y && b_lo.z < b_hi.z)) return Status::input("train-field: the update box is empty");
   f.update_lo = b_lo;
   f.update_hi = b_hi;
+  // The prior is the new scene's moments on the field's grid (parts whose particles did not change
+  // keep their bits); a field before version 4 keeps its one part.
+  if (f.prior_cells > 0) f.prior_parts = prior_parts_of(s, f.prior_cells, f.prior_lo, f.prior_hi);
   const std::pair<Vec3, Vec3> box{b_lo, b_hi - b_lo};
   std::vector<std::uint32_t> pool;
   for (std::uint32_t p = 0; p < s.n; ++p) {
@@ -723,7 +775,8 @@ Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev,
 // ---- file (R1-NRF-030) ------------------------------------------------------------------------
 
 namespace {
-constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\3'};
+constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\4'};
+constexpr char kMagicV3[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\3'};
 constexpr char kMagicV2[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\2'};
 constexpr char kMagicV1[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\1'};
 void put_floats(std::string& out, const std::vector<float>& v) {
@@ -747,10 +800,14 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
   format::put_u32(out, f.local_updates);
   for (const double v : {f.update_lo.x, f.update_lo.y, f.update_lo.z, f.update_hi.x, f.update_hi.y, f.update_hi.z})
     format::put_f64(out, v);
-  format::put_f64(out, f.prior_mass);
-  format::put_f64(out, f.prior_s2);
-  for (const double v : {f.prior_colour.x, f.prior_colour.y, f.prior_colour.z}) format::put_f64(out, v);
-  for (const double v : f.prior_gradient) format::put_f64(out, v);
+  format::put_u32(out, f.prior_cells);
+  for (const double v : {f.prior_lo.x, f.prior_lo.y, f.prior_lo.z, f.prior_hi.x, f.prior_hi.y, f.prior_hi.z}) format::put_f64(out, v);
+  format::put_u32(out, static_cast<std::uint32_t>(f.prior_parts.size()));
+  for (const NeuralField::PriorPart& p : f.prior_parts) {
+    for (const double v : {p.mass, p.s2, p.centroid.x, p.centroid.y, p.centroid.z, p.colour.x, p.colour.y, p.colour.z})
+      format::put_f64(out, v);
+    for (const double v : p.gradient) format::put_f64(out, v);
+  }
   format::put_u32(out, f.fade_power);
   for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
@@ -761,11 +818,12 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
 Result<NeuralField> decode_neural_field(std::string_view bytes, const std::string& name,
                                         std::span<const std::uint8_t> snapshot) {
   const std::size_t kDigest = sizeof(hemera::Digest);
-  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1, 2 or 3)");
+  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1 to 4)");
   const std::string_view magic = bytes.substr(0, sizeof kMagic);
-  const bool v1 = magic == std::string_view(kMagicV1, sizeof kMagicV1), v2 = magic == std::string_view(kMagicV2, sizeof kMagicV2);
-  if (!v1 && !v2 && magic != std::string_view(kMagic, sizeof kMagic))
-    return Status::input(name + ": not an r1 neural field (r1-nrf version 1, 2 or 3)");
+  const bool v1 = magic == std::string_view(kMagicV1, sizeof kMagicV1), v2 = magic == std::string_view(kMagicV2, sizeof kMagicV2),
+             v3 = magic == std::string_view(kMagicV3, sizeof kMagicV3);
+  if (!v1 && !v2 && !v3 && magic != std::string_view(kMagic, sizeof kMagic))
+    return Status::input(name + ": not an r1 neural field (r1-nrf version 1 to 4)");
   const std::string_view body = bytes.substr(0, bytes.size() - kDigest);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(body.data()), body.size()));
   if (!std::equal(d.begin(), d.end(), reinterpret_cast<const std::uint8_t*>(bytes.data() + body.size())))
@@ -799,13 +857,29 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
   }
   f.fade_power = 2;
   if (!v1 && !v2) {
-    if (!r.f64(f.prior_mass) || !r.f64(f.prior_s2)) return r.error("truncated");
-    if (!(f.prior_mass >= 0) || !(f.prior_s2 >= 0) || !std::isfinite(f.prior_mass) || !std::isfinite(f.prior_s2))
-      return r.error("bad prior");
-    for (double* v : {&f.prior_colour.x, &f.prior_colour.y, &f.prior_colour.z})
-      if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad prior");
-    for (double& v : f.prior_gradient)
-      if (!r.f64(v) || !std::isfinite(v)) return r.error("bad prior");
+    // Version 3: one part about the field's centroid, its mass 0 when there is none; version 4: a
+    // count of parts, each of positive mass.
+    std::uint32_t parts = 1;
+    if (!v3) {
+      if (!r.u32(f.prior_cells) || f.prior_cells < 1 || f.prior_cells > 16) return r.error("bad prior grid");
+      for (double* v : {&f.prior_lo.x, &f.prior_lo.y, &f.prior_lo.z, &f.prior_hi.x, &f.prior_hi.y, &f.prior_hi.z})
+        if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad prior grid");
+      if (!r.u32(parts) || parts > std::uint64_t{f.prior_cells} * f.prior_cells * f.prior_cells) return r.error("bad prior part count");
+    }
+    for (std::uint32_t k = 0; k < parts; ++k) {
+      NeuralField::PriorPart p;
+      p.centroid = f.centroid;
+      if (!r.f64(p.mass) || !r.f64(p.s2)) return r.error("truncated");
+      if (!(p.mass >= 0) || !(p.s2 >= 0) || !std::isfinite(p.mass) || !std::isfinite(p.s2) || (!v3 && !(p.mass > 0)))
+        return r.error("bad prior");
+      std::vector<double*> rest;
+      if (!v3) rest = {&p.centroid.x, &p.centroid.y, &p.centroid.z};
+      for (double* v : {&p.colour.x, &p.colour.y, &p.colour.z}) rest.push_back(v);
+      for (double& v : p.gradient) rest.push_back(&v);
+      for (double* v : rest)
+        if (!r.f64(*v) || !std::isfinite(*v)) return r.error("bad prior");
+      if (p.mass > 0) f.prior_parts.push_back(p);
+    }
     if (!r.u32(f.fade_power)) return r.error("truncated");
     if (f.fade_power != 2 && f.fade_power != 4) return r.error("bad fade power (2 or 4)");
   }

@@ -43,13 +43,27 @@ struct NeuralField {
   Vec3 centroid;                          // the scene's phi-weighted centroid (R1-NRF-005)
   double tau_lo = 1, tau_hi = 1;          // the trained tau range (R1-NRF-001, R1-NRF-005)
   double kappa = 0.25;                    // R1-RND-052's density gain
-  double prior_mass = 0, prior_s2 = 0;    // the Gaussian prior (R1-NRF-007); mass 0: none
-  Vec3 prior_colour;                      // its mean colour and the colour's covariance with
-  std::array<double, 9> prior_gradient{}; // position (channel k, axis a at 3 k + a; R1-NRF-008)
-  // The prior's kernel sum at (x, sigma): the scene as one isotropic Gaussian of its mass and
-  // spread about the centroid; 1 when the field has none.
+  // The Gaussian prior (R1-NRF-007, 008): the scene as isotropic Gaussians, one per occupied cell
+  // of a grid over the particles' box; none in fields before version 3.
+  struct PriorPart {
+    double mass = 0, s2 = 0;          // the cell's far-field mass and spread per axis
+    Vec3 centroid;                    // its weighted centroid
+    Vec3 colour;                      // its mean colour and the colour's covariance with
+    std::array<double, 9> gradient{}; // position (channel k, axis a at 3 k + a)
+  };
+  std::vector<PriorPart> prior_parts;
+  // The grid the parts were made on: prior_cells per side of the box [prior_lo, prior_hi] (0 in
+  // fields before version 4, whose one part is kept as it is).
+  std::uint32_t prior_cells = 0;
+  Vec3 prior_lo, prior_hi;
+  // The prior at (x, sigma): its kernel sum, the parts' Gaussians convolved with the kernel (1 when
+  // the field has none), and its colour over 3, each channel in [1e-3, 1 - 1e-3] (R1-NRF-008).
+  struct PriorValue {
+    double weight = 1;
+    Vec3 colour;
+  };
+  PriorValue prior_at(const Vec3& x, double sigma) const;
   double prior(const Vec3& x, double sigma) const;
-  // The prior's colour at (x, sigma) over 3 (R1-NRF-008), each channel in [1e-3, 1 - 1e-3].
   Vec3 colour_prior(const Vec3& x, double sigma) const;
   std::uint64_t seed = 0;                 // R1-NRF-020
   std::uint32_t fade_power = 4;           // the fine levels' fade exponent: 4 (2 in fields before version 3)

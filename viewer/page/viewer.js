@@ -483,11 +483,11 @@ void main() {
   if (uPass == 0) {
     h = aRadius * L / sqrt(L * L - aRadius * aRadius) * 1.02;   // the tangent cone's section
   } else {
-    // Splats reach alpha 1/255 (R1-RND-043) within 3.2 sigma; the field's kernels count to 4 sigma
+    // Splats reach alpha 1/255 (R1-RND-043) within 3.2 sigma; the field's kernels count to 5 sigma
     // (R1-RND-054's cutoff), where many faint tails add up.
     float hs = 0.0, hf = 0.0;
     if (vWeight > 0.0) vConic = screenConic(c, 0.5 * aRadius, 0.3, 3.2, hs);
-    if (vWeightF > 0.0) vConicF = screenConic(c, max(sqrt(uTau * d / uTfar), 0.5 * d / uFocal), 0.0, 4.0, hf);
+    if (vWeightF > 0.0) vConicF = screenConic(c, max(sqrt(uTau * d / uTfar), 0.5 * d / uFocal), 0.0, 5.0, hf);
     h = max(hs, hf);
   }
   vPoint = c + (right * aCorner.x + up * aCorner.y) * h;

@@ -12,7 +12,7 @@ namespace r1::render {
 struct FieldParams {
   int samples = 128;         // N of 7.2
   double kappa = 0.25;       // density gain (R1-RND-052)
-  double cutoff = 4.0;       // nodes farther than cutoff * sigma are skipped (R1-RND-054)
+  double cutoff = 5.0;       // nodes farther than cutoff * sigma are skipped (R1-RND-054)
   double theta = 0.25;       // a node with extent <= theta * sigma is one aggregate (R1-RND-054)
   double stop = 1e-3;        // the march ends when the field's transmittance falls below this
 };

@@ -396,8 +396,9 @@ struct NeuralData {
   render::Vec3 lo, centroid;
   double size = 1, tau_lo = 1, tau_hi = 1, kappa = 0;
   double log2_range = 0;                   // log2(tau_hi / tau_lo), the host's
-  double prior_mass = 0, prior_s2 = 0;     // the Gaussian prior (R1-NRF-007); mass 0: none
-  std::array<double, 12> prior_colour{};   // its colour: mean (3), then the gradient (9; R1-NRF-008)
+  // The Gaussian prior's parts (R1-NRF-007, 008), 17 doubles each: mass, spread s^2, centroid (3),
+  // mean colour (3), colour gradient (9); none: no prior.
+  std::vector<double> prior;
   std::uint32_t fade_power = 4;            // the fine levels' fade exponent (R1-NRF-002): 4 or 2
   std::vector<float> params;
   std::uint32_t inputs() const { return levels * 2 + 1; }
