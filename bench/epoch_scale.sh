@@ -2,7 +2,8 @@
 # Epoch time per stage and peak memory at scale: generates Barabasi-Albert snapshots (m = 10) with
 # 10^4, 10^5 and 10^6 particles (about 10^5, 10^6 and 10^7 links), then runs `r1 epoch` on each
 # and prints the per-stage seconds from its manifest (total = the stages before writing) and the
-# peak resident memory.
+# peak resident memory. With --no-field: the neural field's training is timed by itself
+# (spec/neural.md R1-NRF-013).
 # Usage: bench/epoch_scale.sh [R1_BINARY] [WORK_DIR] [SIZES...]   (sizes default: 10000 100000 1000000)
 # EPOCH_FLAGS adds options to every `r1 epoch`, e.g. EPOCH_FLAGS=--parallel.
 set -euo pipefail
@@ -17,7 +18,7 @@ printf '%-9s %-9s %7s %7s %8s %7s %7s %8s %9s %8s %8s\n' particles links read di
 for n in "${sizes[@]}"; do
   g="$work/ba-$n.graph"
   [ -f "$g" ] || "$r1" gen ba --n "$n" --m 10 -o "$g" >/dev/null
-  /usr/bin/time -f '%M' -o "$work/rss-$n" "$r1" epoch "$g" -q ${EPOCH_FLAGS:-} -o "$work/ba-$n.epoch"
+  /usr/bin/time -f '%M' -o "$work/rss-$n" "$r1" epoch "$g" -q --no-field ${EPOCH_FLAGS:-} -o "$work/ba-$n.epoch"
   python3 - "$work/ba-$n.epoch/manifest.json" "$(cat "$work/rss-$n")" <<'PY'
 import json, sys
 m = json.load(open(sys.argv[1]))

@@ -6,7 +6,8 @@
 # the incremental epoch's carried sums and rows of N_(h+1) after the update, `spectral` its local
 # work, `carry` the O(|P|) gathering of PREV's vectors and image by particle),
 # the sum of the stages, the wall time of the whole command (reading and writing included) and the
-# ratio of the two. Existing snapshots and PREV epochs in WORK_DIR are reused, with the wall time
+# ratio of the two. Every epoch with --no-field: the neural field's training and local update are
+# timed by themselves (spec/neural.md). Existing snapshots and PREV epochs in WORK_DIR are reused, with the wall time
 # of the run that made them (a full epoch of 10^6 particles takes about half an hour on two cores).
 # Usage: bench/incremental_scale.sh [R1_BINARY] [WORK_DIR] [SIZES...]   (sizes default: 10000 100000)
 # UPDATE_FLAGS: the update options (default: --hops 1 --keep-local --full-norm 1000, which time the
@@ -38,7 +39,7 @@ for n in "${sizes[@]}"; do
     esac
   fi
   [ -f "$work/$kind-$n.epoch/manifest.json" ] ||
-    /usr/bin/time -f '%e' -o "$work/wall-$kind-$n" "$r1" epoch "$g" -q --backend "$backend" -o "$work/$kind-$n.epoch"
+    /usr/bin/time -f '%e' -o "$work/wall-$kind-$n" "$r1" epoch "$g" -q --no-field --backend "$backend" -o "$work/$kind-$n.epoch"
   # Ten new links between particles 1024.. (the anchor set stays as it was), by their ids.
   python3 - "$work/$kind-$n.epoch/particles.ids" > "$work/$kind-$n.edits" <<'PY'
 import random, sys
@@ -53,7 +54,7 @@ PY
   # shellcheck disable=SC2086
   rm -rf "$work/$kind-$n-next.epoch"
   # shellcheck disable=SC2086
-  /usr/bin/time -f '%e' -o "$work/wall-$kind-$n-next" "$r1" epoch "$work/$kind-$n-next.graph" --from "$work/$kind-$n.epoch" $flags -q \
+  /usr/bin/time -f '%e' -o "$work/wall-$kind-$n-next" "$r1" epoch "$work/$kind-$n-next.graph" --from "$work/$kind-$n.epoch" $flags -q --no-field \
     --backend "$backend" -o "$work/$kind-$n-next.epoch"
   python3 - "$work/$kind-$n.epoch/manifest.json" "$work/$kind-$n-next.epoch/manifest.json" "$work/wall-$kind-$n" "$work/wall-$kind-$n-next" <<'PY'
 import json, os, sys
@@ -85,7 +86,7 @@ PY
   "$r1" edit "$work/$kind-$n-next.graph" "$work/$kind-$n.edits2" -o "$work/$kind-$n-next2.graph" >/dev/null
   rm -rf "$work/$kind-$n-next2.epoch"
   # shellcheck disable=SC2086
-  "$r1" epoch "$work/$kind-$n-next2.graph" --from "$work/$kind-$n-next.epoch" $flags -q --backend "$backend" -o "$work/$kind-$n-next2.epoch"
+  "$r1" epoch "$work/$kind-$n-next2.graph" --from "$work/$kind-$n-next.epoch" $flags -q --no-field --backend "$backend" -o "$work/$kind-$n-next2.epoch"
   python3 - "$work/$kind-$n-next2.epoch/manifest.json" <<'PY'
 import json, sys
 m = json.load(open(sys.argv[1]))

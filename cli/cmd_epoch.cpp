@@ -42,7 +42,7 @@ struct EpochCliOptions {
   bool no_role_shapes = false;
   std::string radius_scale = "spacing";
   bool no_timings = false;
-  bool field = false;
+  bool field = true;  // train the neural field (R1-NRF-030); --no-field skips it
   std::uint32_t field_steps = render::NeuralConfig{}.steps;
   bool parallel = false;
   bool quiet = false;
@@ -273,8 +273,9 @@ void add_epoch(CLI::App& app, Runner& selected) {
                   "r_0 from the layout's spacing (spacing, default) or r_0 = R_scene (scene)")
       ->check(CLI::IsMember({"spacing", "scene"}));
   cmd->add_flag("--no-role-shapes", c->no_role_shapes, "all spheres instead of hub/bridge/leaf shapes");
-  cmd->add_flag("--field", c->field, "also train the T-infinity neural field (field.nrf, for r1 render --field neural)");
-  cmd->add_option("--field-steps", c->field_steps, "with --field: Adam steps (200)")->check(CLI::Range(1u, 1000000u));
+  cmd->add_flag("--field,!--no-field", c->field,
+                "train the T-infinity neural field (field.nrf, for r1 render --field neural; the default), or not");
+  cmd->add_option("--field-steps", c->field_steps, "the neural field's Adam steps (200)")->check(CLI::Range(1u, 1000000u));
   cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");
   cmd->add_flag("--parallel", c->parallel, "reference stages on every core: spectral, focus, encoding, hierarchy (same bits)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");

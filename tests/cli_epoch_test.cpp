@@ -88,6 +88,26 @@ TEST(CliEpoch, ExportWritesOneRowPerParticleWithTheDocumentedHeader) {
   EXPECT_EQ(out.out, r1::test::read_file(d / "e.tsv"));
 }
 
+// R1-NRF-030: `r1 epoch` trains the neural field by default (here with fewer steps), lists it in
+// the manifest and reads it back for `r1 render --field neural`; --no-field leaves it out.
+TEST(CliEpoch, TrainsTheNeuralFieldUnlessTold) {
+  r1::test::TempDir d;
+  const auto g = gen(d.path(), {"grid", "--dims", "9x7"});
+  const auto r = run_cli({"epoch", g.string(), "--field-steps", "4", "-o", (d / "e").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("field "), std::string::npos) << "the field's stage time: " << r.out;
+  ASSERT_TRUE(std::filesystem::exists(d / "e" / "field.nrf"));
+  const auto m = nlohmann::json::parse(r1::test::read_file(d / "e" / "manifest.json"));
+  EXPECT_TRUE(m["files"].contains("field.nrf"));
+  const auto far = run_cli({"render", (d / "e").string(), "--distance", "2000000", "--size", "64x36", "--field", "neural", "-o",
+                            (d / "far.png").string()});
+  ASSERT_EQ(far.exit_code, 0) << far.err;
+  EXPECT_NE(far.out.find("field: neural"), std::string::npos) << far.out;
+  ASSERT_EQ(run_cli({"epoch", g.string(), "--no-field", "-q", "-o", (d / "plain").string()}).exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(d / "plain" / "field.nrf"));
+  EXPECT_FALSE(nlohmann::json::parse(r1::test::read_file(d / "plain" / "manifest.json"))["files"].contains("field.nrf"));
+}
+
 TEST(CliEpoch, TinyAndDisconnectedGraphs) {
   r1::test::TempDir d;
   // Three particles: only two non-trivial eigenvectors exist; the missing coordinates are 0.

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <fstream>
@@ -85,6 +86,11 @@ CliResult run_cli(const std::vector<std::string>& args, const std::string* stdin
   std::vector<std::string> argv_s;
   argv_s.push_back(R1_CLI_PATH);
   argv_s.insert(argv_s.end(), args.begin(), args.end());
+  // `r1 epoch` trains the neural field by default (a few seconds a run); a test that does not
+  // name it (--field, --no-field, --field-steps) skips it.
+  if (!args.empty() && args[0] == "epoch" &&
+      std::none_of(args.begin(), args.end(), [](const std::string& a) { return a.rfind("--field", 0) == 0 || a == "--no-field"; }))
+    argv_s.push_back("--no-field");
   std::vector<char*> argv;
   for (auto& a : argv_s) argv.push_back(a.data());
   argv.push_back(nullptr);

@@ -483,11 +483,11 @@ void main() {
   if (uPass == 0) {
     h = aRadius * L / sqrt(L * L - aRadius * aRadius) * 1.02;   // the tangent cone's section
   } else {
-    // Splats reach alpha 1/255 (R1-RND-043) within 3.2 sigma; the field's kernels count to 5 sigma
-    // (R1-RND-054's cutoff), where many faint tails add up.
+    // Splats reach alpha 1/255 (R1-RND-043) within 3.2 sigma; the field's kernels count to 4 sigma
+    // (R1-RND-054 cuts at 5; spec/viewer.md says why 4 here), where many faint tails add up.
     float hs = 0.0, hf = 0.0;
     if (vWeight > 0.0) vConic = screenConic(c, 0.5 * aRadius, 0.3, 3.2, hs);
-    if (vWeightF > 0.0) vConicF = screenConic(c, max(sqrt(uTau * d / uTfar), 0.5 * d / uFocal), 0.0, 5.0, hf);
+    if (vWeightF > 0.0) vConicF = screenConic(c, max(sqrt(uTau * d / uTfar), 0.5 * d / uFocal), 0.0, 4.0, hf);
     h = max(hs, hf);
   }
   vPoint = c + (right * aCorner.x + up * aCorner.y) * h;
@@ -799,7 +799,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     const x = rotate(q, [1, 0, 0]), y = rotate(q, [0, 1, 0]), z = rotate(q, [0, 0, 1]);
     return new Float32Array([x[0], y[0], z[0], x[1], y[1], z[1], x[2], y[2], z[2]]);
   }
-  // R1-RND-051, 057: the farthest corner of the top-level boxes, grown by 4 kernel widths there.
+  // R1-RND-051, 057: the farthest corner of the top-level boxes, grown by 5 kernel widths there.
   function tFar(c, f) {
     let far = 0;
     for (let id = S.levelOffset[3]; id < S.levelOffset[4]; ++id) {
@@ -810,7 +810,7 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
       }
     }
     far = Math.max(far, 1);
-    return far + 4 * Math.max(Math.sqrt(tauCam(c)), 0.5 * far / f.focal + 1e-9);
+    return far + 5 * Math.max(Math.sqrt(tauCam(c)), 0.5 * far / f.focal + 1e-9);
   }
   function setUniforms(p, c, f, tfar) {
     gl.useProgram(p);

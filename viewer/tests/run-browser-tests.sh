@@ -24,9 +24,9 @@ fi
 rm -rf "$work"
 mkdir -p "$work"
 "$r1" gen crystal -o "$work/crystal.graph" >/dev/null
-"$r1" epoch "$work/crystal.graph" --overlay crystal-v5 -o "$work/crystal.epoch" >/dev/null
+"$r1" epoch "$work/crystal.graph" --overlay crystal-v5 --no-field -o "$work/crystal.epoch" >/dev/null
 "$r1" gen sbm --n 240 --k 3 --p-in 0.12 --p-out 0.01 -o "$work/sbm.graph" >/dev/null
-"$r1" epoch "$work/sbm.graph" -o "$work/sbm.epoch" >/dev/null
+"$r1" epoch "$work/sbm.graph" --no-field -o "$work/sbm.epoch" >/dev/null
 # T0 content (R1-VIEW-070..072) for three crystal particles, by id: an image (a 48x32 frame of the
 # second epoch), a text, and a file that is not there; the epoch is made again with it.
 mkdir -p "$work/content"
@@ -36,5 +36,5 @@ printf 'T0 <b>text</b> of a particle\nsecond line\n' > "$work/content/notes.txt"
   $2 == "Math entity 1" { print $1 "\tpicture.png" }
   $2 == "Math entity 2" { print $1 "\tnotes.txt" }
   $2 == "Math entity 3" { print $1 "\tgone.pdf" }' > "$work/content/side.tsv"
-"$r1" epoch "$work/crystal.graph" --overlay crystal-v5 --content "$work/content/side.tsv" -o "$work/crystal.epoch" >/dev/null
+"$r1" epoch "$work/crystal.graph" --overlay crystal-v5 --content "$work/content/side.tsv" --no-field -o "$work/crystal.epoch" >/dev/null
 exec node "$here/view_test.mjs" "$r1" "$work/crystal.epoch" "$work/sbm.epoch" "$work/out"

@@ -143,7 +143,7 @@ try {
     await page.evaluate((q) => window.r1view.warp(q), title);
     await page.evaluate(() => window.r1view.frame());
     const st = await page.evaluate(() => window.r1view.stats());
-    await page.locator('#gl').screenshot({ path: pagePng });
+    await page.locator('#gl').screenshot({ path: pagePng, timeout: 90000 });  // software WebGL beside other tests
     execFileSync(r1, ['render', epoch, '--eye', ...eye.map(String), '--target', ...target.map(String), '--size', '960x540',
                       '--no-labels', '--no-field', '--path', `warp:${title}`, '--fps', '2', '-o', refBase, '-q']);
     const refPng = refBase.replace(/\.png$/, '-001.png');
@@ -173,7 +173,7 @@ try {
     await page.goto(`${main.url}?eye=${e}&target=0,0,0&size=480x270&labels=0&ui=0&time=0`);
     await page.evaluate(() => window.r1view.ready);
     await page.evaluate(() => window.r1view.frame());
-    await page.locator('#gl').screenshot({ path: pagePng });
+    await page.locator('#gl').screenshot({ path: pagePng, timeout: 90000 });  // software WebGL beside other tests
     execFileSync(r1, ['render', epoch, '--eye', ...e.map(String), '--target', '0', '0', '0', '--size', '480x270', '--no-labels',
                       '-o', refPng, '-q']);
     let out;
