@@ -256,12 +256,13 @@ Result<std::map<std::string, double>> read_timings(const fs::path& epoch) {
   return t;
 }
 
-// One (input, backend) run: `r1 epoch` then `r1 bench-frame` on that epoch, each a child.
+// One (input, backend) run: `r1 epoch` then `r1 bench-frame` on that epoch, each a child. The
+// epoch without the neural field: its training is no backend's stage (spec/bench.md R1-BEN-020).
 Status run_one(Run& r, const Input& in, const BackendEntry& b, const fs::path& work, const fs::path& dir,
                const std::string& size) {
   const std::string stem = in.name + "." + b.name;
   const fs::path epoch = work / (stem + ".epoch");
-  R1_ASSIGN(r.epoch, run_self({"epoch", in.path, "--backend", b.name, "-q", "-o", epoch.string()},
+  R1_ASSIGN(r.epoch, run_self({"epoch", in.path, "--backend", b.name, "--no-field", "-q", "-o", epoch.string()},
                               work / (stem + ".epoch.out"), work / (stem + ".epoch.err")));
   if (!r.epoch.ok()) {
     r.error = "epoch " + strip_r1(r.epoch.failure());
