@@ -51,9 +51,9 @@ struct CliResult {
   std::string err;
 };
 // Runs the built `r1` with the given arguments (no shell), capturing stdout and stderr.
-// `stdin_data`, when given, is fed to standard input.
-// Runs the r1 CLI; an `epoch` command that does not name the neural field (--field, --no-field,
-// --field-steps) gets --no-field, since training it by default costs seconds a run.
+// `stdin_data`, when given, is fed to standard input. An `epoch` command that does not name the
+// neural field (--field, --no-field, --field-steps) gets --no-field: training it, the default,
+// costs seconds a run.
 CliResult run_cli(const std::vector<std::string>& args, const std::string* stdin_data = nullptr);
 
 }  // namespace r1::test
