@@ -142,8 +142,7 @@ FieldValue decode_neural_outputs(const NeuralField& f, const float* o, const Vec
     const NeuralField::PriorValue pv = f.prior_at(x, sigma);
     v.weight = std::exp(o0) * pv.weight;
     // 3 sigmoid(o + logit(q)) for the prior's colour q (R1-NRF-008), as 3 q / (q + (1 - q) e^-o).
-    const Vec3 q = pv.colour;
-    const double qs[3] = {q.x, q.y, q.z};
+    const double qs[3] = {pv.colour.x, pv.colour.y, pv.colour.z};
     double c[3];
     for (int k = 0; k < 3; ++k) c[k] = 3 * qs[k] / (qs[k] + (1 - qs[k]) * std::exp(-static_cast<double>(o[1 + k])));
     v.color = Vec3{c[0], c[1], c[2]};
@@ -289,8 +288,6 @@ NeuralField::PriorValue NeuralField::prior_at(const Vec3& x, double sigma) const
   return out;
 }
 
-double NeuralField::prior(const Vec3& x, double sigma) const { return prior_at(x, sigma).weight; }
-Vec3 NeuralField::colour_prior(const Vec3& x, double sigma) const { return prior_at(x, sigma).colour; }
 
 NeuralInference::NeuralInference(const NeuralField& f)
     : f_(f),
@@ -473,7 +470,7 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
       const NeuralField::PriorValue pv = f.prior_at(x, sigma);
       smp.prior = pv.weight;
       if (!f.prior_parts.empty()) {
-        const Vec3 q = pv.colour;
+        const Vec3& q = pv.colour;
         smp.colour_logit[0] = std::log(q.x / (1 - q.x));
         smp.colour_logit[1] = std::log(q.y / (1 - q.y));
         smp.colour_logit[2] = std::log(q.z / (1 - q.z));

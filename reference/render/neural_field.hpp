@@ -63,8 +63,6 @@ struct NeuralField {
     Vec3 colour;
   };
   PriorValue prior_at(const Vec3& x, double sigma) const;
-  double prior(const Vec3& x, double sigma) const;
-  Vec3 colour_prior(const Vec3& x, double sigma) const;
   std::uint64_t seed = 0;                 // R1-NRF-020
   std::uint32_t fade_power = 4;           // the fine levels' fade exponent: 4 (2 in fields before version 3)
   std::vector<float> grid;                // levels x 2^log2_table x 2

@@ -181,11 +181,11 @@ TEST(NeuralField, ThePriorIsTheScenesMomentsGaussian) {
     for (const Vec3 d : {Vec3{0, 0, 0}, Vec3{0.3, 0, 0}, Vec3{0, -0.5, 0}, Vec3{0, 0, 0.7}, Vec3{-0.4, 0.2, 0}}) {
       const Vec3 x = f->centroid + d * std::max(sigma, std::sqrt(f->tau_hi));
       const DirectSum want = direct_sum(s, x, sigma);
-      const double err = std::fabs(f->prior(x, sigma) / want.weight - 1);
+      const double err = std::fabs(f->prior_at(x, sigma).weight / want.weight - 1);
       EXPECT_LT(err, b.parts) << "sigma " << sigma << " offset " << d.x << " " << d.y << " " << d.z;
-      EXPECT_LT(length(f->colour_prior(x, sigma) * 3.0 - want.color), b.colour) << "sigma " << sigma;
+      EXPECT_LT(length(f->prior_at(x, sigma).colour * 3.0 - want.color), b.colour) << "sigma " << sigma;
       worst = std::max(worst, err);
-      worst_one = std::max(worst_one, std::fabs(one.prior(x, sigma) / want.weight - 1));
+      worst_one = std::max(worst_one, std::fabs(one.prior_at(x, sigma).weight / want.weight - 1));
     }
     if (b.wide <= 1) {
       EXPECT_GT(worst_one, 10 * worst) << "sigma " << sigma << ": the parts should beat one Gaussian";
@@ -194,7 +194,7 @@ TEST(NeuralField, ThePriorIsTheScenesMomentsGaussian) {
   // A field without a prior (files before version 3) has the factor 1.
   NeuralField none = *f;
   none.prior_parts.clear();
-  EXPECT_EQ(none.prior(f->centroid, 1.0), 1.0);
+  EXPECT_EQ(none.prior_at(f->centroid, 1.0).weight, 1.0);
 }
 
 // R1-NRF-007: far views query the field at the widest kernel, sigma_hi = sqrt(tau_hi), where the
