@@ -433,7 +433,9 @@ TEST(FramePassesEdges, TheVulkanEdgePassIsTheReferencePixelByPixel) {
 // drawn with a trained field by the vulkan backend against the reference's, the same bits on
 // lavapipe (on a GPU every channel within 1e-6), with no pixel left to the host and the device's
 // inference counted; two architectures (r1's default, and 8 levels of 2^10 entries with 16
-// hidden); one the device does not infer (256 + 1 hidden) is drawn by the host, as the reference.
+// hidden), each also with a candidate cap of 1 (rays past the cap walk the hierarchy again at
+// each sample on the device, R1-BKD-076); one the device does not infer (256 + 1 hidden) is drawn
+// by the host, as the reference.
 TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
   R1_NEED_DEVICE(probe);
   const bool cpu = probe->info().cpu;
@@ -443,10 +445,13 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
   const render::Scene scene = render::make_scene(*epoch);
   auto reference = backends::make_backend("reference");
   auto vulkan = backends::make_backend("vulkan");
-  ASSERT_TRUE(reference.is_ok() && vulkan.is_ok());
+  setenv("R1_VULKAN_FIELD_CANDIDATES", "1", 1);
+  auto capped = backends::make_backend("vulkan");
+  unsetenv("R1_VULKAN_FIELD_CANDIDATES");
+  ASSERT_TRUE(reference.is_ok() && vulkan.is_ok() && capped.is_ok());
   render::View base;
   base.width = 96, base.height = 54;
-  const std::vector<render::View> views = render::orbit_views(base, scene.centroid, 400000, 3);
+  const std::vector<render::View> views = render::orbit_views(base, scene.centroid, 100000, 3);
   struct Arch {
     std::uint32_t levels, log2_table, hidden;
     bool device;
@@ -463,9 +468,12 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
     const std::string bytes = render::encode_neural_field(*field, epoch->snapshot_digest);
     render::RenderOptions options;
     options.neural_field = bytes;
-    for (std::size_t i = 0; i < views.size(); ++i) {
+    std::uint64_t rewalked = 0;
+    for (std::size_t j = 0; j < 2 * views.size(); ++j) {
+      const std::size_t i = j % views.size();
+      SCOPED_TRACE(j < views.size() ? "default candidate cap" : "candidate cap 1");
       render::FrameStats sw, sr;
-      auto got = (*vulkan)->render(*epoch, views[i], options, &sw, {});
+      auto got = (j < views.size() ? *vulkan : *capped)->render(*epoch, views[i], options, &sw, {});
       auto want = (*reference)->render(*epoch, views[i], options, &sr, {});
       ASSERT_TRUE(got.is_ok()) << got.status().message();
       ASSERT_TRUE(want.is_ok()) << want.status().message();
@@ -473,6 +481,7 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
       const std::size_t pixels = static_cast<std::size_t>(base.width) * static_cast<std::size_t>(base.height);
       if (arch.device) {
         EXPECT_EQ(sw.host_pixels, 0u) << "view " << i;
+        rewalked += sw.field_rewalked;
         EXPECT_GE(sw.field_neural, sr.field_neural) << "view " << i;
       } else {
         EXPECT_EQ(sw.host_pixels, pixels) << "view " << i;
@@ -486,6 +495,9 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
       } else {
         for (std::size_t k = 0; k < got->rgba.size(); ++k) ASSERT_NEAR(got->rgba[k], want->rgba[k], 1e-6f) << k;
       }
+    }
+    if (arch.device) {
+      EXPECT_GT(rewalked, 0u) << "some rays pass the cap of 1 and walk again on the device";
     }
   }
 }

@@ -109,6 +109,9 @@ void print_stats(const fs::path& path, const render::View& v, const render::Fram
   std::printf("  time %.2f s: cull %.3f, T1/T2 impostors %.2f, edges %.2f, T3 splats %.2f, Tinf field %.2f, labels %.3f\n", st.total_s,
               st.cull_s, st.impostor_s, st.edge_s, st.splat_s, st.field_s, st.label_s);
   if (st.content > 0) std::printf("  T0 content: %llu particle%s opened\n", static_cast<unsigned long long>(st.content), st.content == 1 ? "" : "s");
+  if (st.field_rewalked > 0)
+    std::printf("  the backend's field pass walked the hierarchy again at each sample for %llu rays past its candidate cap\n",
+                static_cast<unsigned long long>(st.field_rewalked));
   if (st.host_pixels > 0)
     std::printf("  the backend's field pass left %llu pixels (%.2f%%) to the host\n", static_cast<unsigned long long>(st.host_pixels),
                 100.0 * static_cast<double>(st.host_pixels) / (static_cast<double>(v.width) * v.height));

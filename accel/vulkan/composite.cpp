@@ -122,6 +122,66 @@ double cand_t0[kMaxCand];
 double cand_t1[kMaxCand];
 bool cand_agg[kMaxCand];
 
+// The candidate walk (R1-RND-057): a depth-first walk of each root's subtree without a stack (down
+// to the first child, else on to the next sibling, climbing to a parent's next sibling when a
+// child list ends). A node whose ball, grown by `grow`, the ray crosses within [kNear, t_end] is a
+// candidate where it aggregates (extent <= theta sigma(t0)) or is a leaf, else it is opened.
+// op 0 lists the candidates and their span [a, b]; past the cap it sets `over` and, for the
+// neural field, walks on for the span alone. op 1 returns whether some candidate spans ts and
+// reaches xs within `reach`: the neural field's test of a sample on a ray past the cap, the same
+// answer as the listed candidates give, walked again instead of stored.
+bool walk(uint op, dvec3 pos, dvec3 d, double t_end, double grow, double theta, uint r_begin, uint r_end, bool from_tile,
+          double ts, dvec3 xs, double reach, inout int nc, inout double a, inout double b, inout bool over) {
+  for (uint rk = r_begin; rk < r_end && !(over && p.mode == 0u); ++rk) {
+    uint root = from_tile ? p.level3 + idx[p.top + rk] : rk;
+    uint g = root;
+    while (true) {
+      bool descend = false;
+      double w = node[g * 8u];
+      if (w > 0.0LF) {
+        dvec3 c = nvec(g, 1u);
+        double extent = node[g * 8u + 7u];
+        // ray_ball within [kNear, t_end]
+        precise dvec3 oc = dvec3(pos.x - c.x, pos.y - c.y, pos.z - c.z);
+        precise double rr = extent + grow;
+        precise double bb = dotp(d, oc);
+        precise double disc = bb * bb - (dotp(oc, oc) - rr * rr);
+        if (disc >= 0.0LF) {
+          precise double q = sqrt(disc);
+          double t0 = max(kNear, -bb - q), t1 = min(t_end, -bb + q);
+          if (t0 <= t1) {
+            uint lv = level_of(g);
+            bool agg = extent <= theta * field_sigma(t0);
+            if (agg || lv == 0u) {
+              if (op == 1u) {
+                if (t0 <= ts && t1 >= ts && within_reach(xs, c, extent, reach)) return true;
+              } else {
+                if (nc == kMaxCand) {
+                  over = true;
+                  if (p.mode == 0u) break;
+                } else {
+                  cand_node[nc] = g; cand_t0[nc] = t0; cand_t1[nc] = t1; cand_agg[nc] = agg; ++nc;
+                }
+                a = min(a, t0); b = max(b, t1);
+              }
+            } else {
+              descend = idx[p.child_ptr + g - p.level1] < idx[p.child_ptr + g - p.level1 + 1u];
+            }
+          }
+        }
+      }
+      if (descend) {
+        g = idx[p.child + idx[p.child_ptr + g - p.level1]];
+        continue;
+      }
+      while (g != root && idx[p.next + g] == 0xffffffffu) g = idx[p.parent + g];
+      if (g == root) break;
+      g = idx[p.next + g];
+    }
+  }
+  return false;
+}
+
 void main() {
   uint x = gl_GlobalInvocationID.x, row = gl_GlobalInvocationID.y, y = p.y0 + row;
   if (x >= p.width || row >= p.rows) return;
@@ -141,61 +201,23 @@ void main() {
   bool over = false;
   double t_end = min(t_op, prm[14]);
   bool march = p.field_on != 0u && t_end > kNear;
+  double grow = cutoff * field_sigma(t_end);
+  uint tile = (y / 16u) * p.tiles_x + x / 16u;
+  bool from_tile = p.tiles != 0u && tile < p.tiles;
+  uint r_begin = from_tile ? idx[p.top_ptr + tile] : p.level3;
+  uint r_end = from_tile ? idx[p.top_ptr + tile + 1u] : p.level4;
   if (march) {
-    double grow = cutoff * field_sigma(t_end);
-    uint tile = (y / 16u) * p.tiles_x + x / 16u;
-    bool from_tile = p.tiles != 0u && tile < p.tiles;
-    uint r_begin = from_tile ? idx[p.top_ptr + tile] : p.level3;
-    uint r_end = from_tile ? idx[p.top_ptr + tile + 1u] : p.level4;
     a = t_end; b = kNear;
-    // A depth-first walk of each root's subtree without a stack: down to the first child, else
-    // on to the next sibling, climbing to a parent's next sibling when a child list ends.
-    for (uint rk = r_begin; rk < r_end && !over; ++rk) {
-      uint root = from_tile ? p.level3 + idx[p.top + rk] : rk;
-      uint g = root;
-      while (true) {
-        bool descend = false;
-        double w = node[g * 8u];
-        if (w > 0.0LF) {
-          dvec3 c = nvec(g, 1u);
-          double extent = node[g * 8u + 7u];
-          // ray_ball within [kNear, t_end]
-          precise dvec3 oc = dvec3(pos.x - c.x, pos.y - c.y, pos.z - c.z);
-          precise double rr = extent + grow;
-          precise double bb = dotp(d, oc);
-          precise double disc = bb * bb - (dotp(oc, oc) - rr * rr);
-          if (disc >= 0.0LF) {
-            precise double q = sqrt(disc);
-            double t0 = max(kNear, -bb - q), t1 = min(t_end, -bb + q);
-            if (t0 <= t1) {
-              uint lv = level_of(g);
-              bool agg = extent <= theta * field_sigma(t0);
-              if (agg || lv == 0u) {
-                if (nc == kMaxCand) { over = true; break; }
-                cand_node[nc] = g; cand_t0[nc] = t0; cand_t1[nc] = t1; cand_agg[nc] = agg; ++nc;
-                a = min(a, t0); b = max(b, t1);
-              } else {
-                descend = idx[p.child_ptr + g - p.level1] < idx[p.child_ptr + g - p.level1 + 1u];
-              }
-            }
-          }
-        }
-        if (descend) {
-          g = idx[p.child + idx[p.child_ptr + g - p.level1]];
-          continue;
-        }
-        while (g != root && idx[p.next + g] == 0xffffffffu) g = idx[p.parent + g];
-        if (g == root) break;
-        g = idx[p.next + g];
-      }
-    }
-    if (over) {
+    walk(0u, pos, d, t_end, grow, theta, r_begin, r_end, from_tile, 0.0LF, dvec3(0.0LF), 0.0LF, nc, a, b, over);
+    if (over && p.mode == 2u) atomicAdd(flag[3], 1u);
+    if (over && p.mode == 0u) {
       atomicAdd(flag[0], 1u);
       result[px * 7u + 3u] = uintBitsToFloat(0x7fc00000u);  // the host draws this pixel
       return;
     }
-    // Entry order, ties by level and id (global index).
-    for (int i = 1; i < nc; ++i)
+    // Entry order, ties by level and id (global index): the analytic field sums in it; the neural
+    // field's test of a sample does not depend on it.
+    for (int i = 1; i < nc && p.mode == 0u; ++i)
       for (int j = i; j > 0 && (cand_t0[j - 1] > cand_t0[j] || (cand_t0[j - 1] == cand_t0[j] && cand_node[j - 1] > cand_node[j])); --j) {
         uint tn = cand_node[j]; cand_node[j] = cand_node[j - 1]; cand_node[j - 1] = tn;
         double ta = cand_t0[j]; cand_t0[j] = cand_t0[j - 1]; cand_t0[j - 1] = ta;
@@ -231,7 +253,13 @@ void main() {
       if (p.mode != 0u) {
         // The neural field (R1-NRF-031) at the samples some candidate reaches.
         bool near = false;
-        for (int c = 0; c < nc && !near; ++c) {
+        if (over) {
+          int n0 = 0;
+          double a0 = 0.0LF, b0 = 0.0LF;
+          bool o0 = false;
+          near = walk(1u, pos, d, t_end, grow, theta, r_begin, r_end, from_tile, t, xs, reach, n0, a0, b0, o0);
+        }
+        for (int c = 0; c < nc && !near && !over; ++c) {
           if (cand_t0[c] > t || cand_t1[c] < t) continue;
           near = within_reach(xs, nvec(cand_node[c], 1u), node[cand_node[c] * 8u + 7u], reach);
         }
@@ -531,7 +559,7 @@ Result<std::array<std::uint32_t, 12>> CompositePass::upload_neural(const NeuralD
                          n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range,
                          static_cast<double>(n.fade_power)};
   const auto put = [&](std::size_t which, auto span) -> Status {
-    R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
+    R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16), Residence::kUpload));
     return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);
   };
   R1_TRY(put(11, std::span<const float>(n.params)));
@@ -592,8 +620,10 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   prm[18] = field.stop;
   prm[20] = exp_.log2e, prm[21] = exp_.ln2_hi, prm[22] = exp_.ln2_lo;
   std::copy(exp_.taylor.begin(), exp_.taylor.end(), prm.begin() + 23);
+  // What the host writes once a frame and every ray reads lives on the device where it can
+  // (R1-BKD-060); the samples and the network's outputs at them never leave it.
   const auto ensure_write = [&](std::size_t which, auto span) -> Status {
-    R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16)));
+    R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16), Residence::kUpload));
     return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);
   };
   const std::vector<double> one(8, 0.0);
@@ -619,11 +649,11 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   const std::size_t band = std::max<std::size_t>(1, std::min<std::size_t>(cam.height, ctx_->info().max_buffer / per_row));
   if (nd != nullptr) {
     const std::size_t slots = band * cam.width * std::max<std::uint32_t>(field.samples, 1);
-    R1_TRY(ctx_->buffer_ensure(buffers_[8], slots * 32));
-    R1_TRY(ctx_->buffer_ensure(buffers_[9], band * cam.width * 4));
-    R1_TRY(ctx_->buffer_ensure(buffers_[10], slots * 28));
+    R1_TRY(ctx_->buffer_ensure(buffers_[8], slots * 32, Residence::kScratch));
+    R1_TRY(ctx_->buffer_ensure(buffers_[9], band * cam.width * 4, Residence::kScratch));
+    R1_TRY(ctx_->buffer_ensure(buffers_[10], slots * 28, Residence::kScratch));
   }
-  R1_TRY(ctx_->buffer_ensure(buffers_[4], band * cam.width * 32));
+  R1_TRY(ctx_->buffer_ensure(buffers_[4], band * cam.width * 32, Residence::kUpload));
   R1_TRY(ctx_->buffer_ensure(buffers_[5], band * cam.width * 28));
   R1_TRY(ctx_->buffer_ensure(buffers_[7], 16));
   const std::uint32_t zero[4] = {0, 0, 0, 0};
@@ -672,6 +702,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   std::uint32_t f[4];
   std::memcpy(f, flags.data(), 16);
   inferred_ = f[2];
+  rewalked_ = f[3];
   flow.clear();
   if (f[1] != 0) flow = std::move(flows);
   return Status::ok();

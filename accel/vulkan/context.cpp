@@ -181,29 +181,29 @@ Result<std::unique_ptr<Context>> Context::create() {
   return std::unique_ptr<Context>(new Context(std::move(s)));
 }
 
-Result<std::uint32_t> Context::buffer_create(std::size_t bytes) {
+Result<std::uint32_t> Context::buffer_create(std::size_t bytes, Residence where) {
   if (bytes > s_->limits.maxStorageBufferRange)
     return Status::input("vulkan: a buffer of " + std::to_string(bytes) + " bytes exceeds the device's storage range of " +
                          std::to_string(s_->limits.maxStorageBufferRange));
-  return s_->make_buffer(bytes);
+  return s_->make_buffer(bytes, where);
 }
 
 void Context::buffer_release(std::uint32_t id) {
   if (id < 1 || id >= s_->buffers.size() || s_->buffers[id].buffer == VK_NULL_HANDLE) return;
   auto& b = s_->buffers[id];
   vkDeviceWaitIdle(s_->device);
-  vkUnmapMemory(s_->device, b.memory);
+  if (b.mapped != nullptr) vkUnmapMemory(s_->device, b.memory);
   vkDestroyBuffer(s_->device, b.buffer, nullptr);
   vkFreeMemory(s_->device, b.memory, nullptr);
   b = State::Buffer{};
 }
 
-Status Context::buffer_ensure(std::uint32_t& id, std::size_t bytes) {
-  if (id != 0 && buffer_size(id) >= bytes) return Status::ok();
+Status Context::buffer_ensure(std::uint32_t& id, std::size_t bytes, Residence where) {
+  if (id != 0 && buffer_size(id) >= bytes && s_->buffers[id].asked == where) return Status::ok();
   buffer_release(id);
   id = 0;
   const std::size_t slack = std::max(bytes, std::min(bytes + bytes / 4, s_->info.max_buffer));
-  R1_ASSIGN(id, buffer_create(std::max<std::size_t>(slack, 16)));
+  R1_ASSIGN(id, buffer_create(std::max<std::size_t>(slack, 16), where));
   return Status::ok();
 }
 
@@ -214,6 +214,7 @@ std::size_t Context::buffer_size(std::uint32_t id) const {
 Status Context::buffer_write(std::uint32_t id, std::span<const std::uint8_t> data, std::size_t offset) {
   if (id < 1 || id >= s_->buffers.size()) return Status::input("vulkan: no buffer " + std::to_string(id));
   const auto& b = s_->buffers[id];
+  if (b.mapped == nullptr) return Status::internal("vulkan: buffer " + std::to_string(id) + " is device-only scratch");
   if (offset > b.size || data.size() > b.size - offset)
     return Status::input("vulkan: write of " + std::to_string(data.size()) + " bytes at " + std::to_string(offset) +
                          " overruns buffer " + std::to_string(id) + " of " + std::to_string(b.size));
@@ -224,6 +225,7 @@ Status Context::buffer_write(std::uint32_t id, std::span<const std::uint8_t> dat
 Result<std::vector<std::uint8_t>> Context::buffer_read(std::uint32_t id, std::size_t offset, std::size_t size) {
   if (id < 1 || id >= s_->buffers.size()) return Status::input("vulkan: no buffer " + std::to_string(id));
   const auto& b = s_->buffers[id];
+  if (b.mapped == nullptr) return Status::internal("vulkan: buffer " + std::to_string(id) + " is device-only scratch");
   if (offset > b.size || size > b.size - offset)
     return Status::input("vulkan: read of " + std::to_string(size) + " bytes at " + std::to_string(offset) + " overruns buffer " +
                          std::to_string(id) + " of " + std::to_string(b.size));

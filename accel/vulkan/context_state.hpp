@@ -5,6 +5,8 @@
 #include <vulkan/vulkan.h>
 #include <shaderc/shaderc.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <span>
@@ -50,6 +52,7 @@ struct Context::State {
     VkDeviceMemory memory = VK_NULL_HANDLE;
     std::uint8_t* mapped = nullptr;
     std::size_t size = 0;
+    Residence asked = Residence::kHost;
   };
   std::vector<Buffer> buffers;  // buffers[0]: the 16-byte placeholder every unused slot binds
   std::vector<VkPipeline> pipelines;  // compute and graphics
@@ -95,7 +98,7 @@ struct Context::State {
       for (VkPipeline p : pipelines) vkDestroyPipeline(device, p, nullptr);
       for (const Buffer& b : buffers) {
         if (b.buffer == VK_NULL_HANDLE) continue;  // released
-        if (b.memory != VK_NULL_HANDLE) vkUnmapMemory(device, b.memory);
+        if (b.mapped != nullptr) vkUnmapMemory(device, b.memory);
         vkDestroyBuffer(device, b.buffer, nullptr);
         vkFreeMemory(device, b.memory, nullptr);
       }
@@ -109,9 +112,32 @@ struct Context::State {
     if (instance != VK_NULL_HANDLE) vkDestroyInstance(instance, nullptr);
   }
 
-  Result<std::uint32_t> make_buffer(std::size_t bytes) {
+  // The memory type for a buffer of `bits` in the order `where` prefers (R1-BKD-060); candidates
+  // after the first are fall-backs when an allocation fails.
+  std::vector<std::uint32_t> memory_types(std::uint32_t bits, Residence where) const {
+    constexpr VkMemoryPropertyFlags kLocal = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, kVisible = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                    kCoherent = VK_MEMORY_PROPERTY_HOST_COHERENT_BIT, kCached = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+    std::vector<VkMemoryPropertyFlags> order;
+    if (where == Residence::kScratch) order.push_back(kLocal);
+    if (where == Residence::kUpload) order.push_back(kLocal | kVisible | kCoherent);
+    order.push_back(kVisible | kCoherent | kCached);
+    order.push_back(kVisible | kCoherent);
+    std::vector<std::uint32_t> types;
+    for (const VkMemoryPropertyFlags want : order)
+      for (std::uint32_t t = 0; t < memory.memoryTypeCount; ++t)
+        if ((bits & (1u << t)) && (memory.memoryTypes[t].propertyFlags & want) == want &&
+            std::find(types.begin(), types.end(), t) == types.end()) {
+          types.push_back(t);
+          break;
+        }
+    return types;
+  }
+
+  Result<std::uint32_t> make_buffer(std::size_t bytes, Residence where = Residence::kHost) {
     Buffer b;
     b.size = bytes;
+    b.asked = where;
+    if (const char* env = std::getenv("R1_VULKAN_MEMORY"); env != nullptr && std::string_view(env) == "host") where = Residence::kHost;
     auto bi = make<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
     bi.size = std::max<std::size_t>(bytes, 16);
     bi.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
@@ -120,24 +146,31 @@ struct Context::State {
     if (VkResult r = vkCreateBuffer(device, &bi, nullptr, &b.buffer); r != VK_SUCCESS) return fail("vkCreateBuffer", r);
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(device, b.buffer, &req);
-    const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    std::uint32_t type = memory.memoryTypeCount;
-    for (std::uint32_t t = 0; t < memory.memoryTypeCount && type == memory.memoryTypeCount; ++t)
-      if ((req.memoryTypeBits & (1u << t)) && (memory.memoryTypes[t].propertyFlags & want) == want) type = t;
-    if (type == memory.memoryTypeCount) {
+    const std::vector<std::uint32_t> types = memory_types(req.memoryTypeBits, where);
+    if (types.empty() || !(memory.memoryTypes[types.back()].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) {
       vkDestroyBuffer(device, b.buffer, nullptr);
       return Status::input("vulkan: no host-visible coherent memory for a storage buffer");
     }
+    // The first type that takes the allocation: device-local memory may be full or, mapped, small.
     auto ai = make<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
     ai.allocationSize = req.size;
-    ai.memoryTypeIndex = type;
-    if (VkResult r = vkAllocateMemory(device, &ai, nullptr, &b.memory); r != VK_SUCCESS) {
+    VkResult r = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    std::uint32_t type = 0;
+    for (const std::uint32_t t : types) {
+      ai.memoryTypeIndex = type = t;
+      if ((r = vkAllocateMemory(device, &ai, nullptr, &b.memory)) == VK_SUCCESS) break;
+    }
+    if (r != VK_SUCCESS) {
       vkDestroyBuffer(device, b.buffer, nullptr);
       return fail("vkAllocateMemory of " + std::to_string(req.size) + " bytes", r);
     }
     vkBindBufferMemory(device, b.buffer, b.memory, 0);
+    if (!(memory.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) {
+      buffers.push_back(b);  // device-only scratch: never mapped, its contents the passes' own
+      return static_cast<std::uint32_t>(buffers.size() - 1);
+    }
     void* p = nullptr;
-    if (VkResult r = vkMapMemory(device, b.memory, 0, VK_WHOLE_SIZE, 0, &p); r != VK_SUCCESS) {
+    if ((r = vkMapMemory(device, b.memory, 0, VK_WHOLE_SIZE, 0, &p)) != VK_SUCCESS) {
       vkDestroyBuffer(device, b.buffer, nullptr);
       vkFreeMemory(device, b.memory, nullptr);
       return fail("vkMapMemory", r);

@@ -38,6 +38,9 @@ struct FrameStats {
   std::uint64_t field_neural = 0;  // samples the neural field drew (R1-NRF-031)
   // Pixels a backend's field and composite pass left to the host (R1-RND-078).
   std::uint64_t host_pixels = 0;
+  // Rays of a neural frame with more candidate nodes than a backend's pass holds, walked again at
+  // each sample on the device instead (R1-BKD-076).
+  std::uint64_t field_rewalked = 0;
   // Seconds per stage.
   double cull_s = 0, impostor_s = 0, edge_s = 0, splat_s = 0, field_s = 0, label_s = 0, total_s = 0;
 };

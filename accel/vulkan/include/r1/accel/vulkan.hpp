@@ -28,6 +28,15 @@ struct DeviceInfo {
   bool graphics = false;       // a graphics queue and dynamic rendering: the raster calls work
 };
 
+// Where a buffer's memory lives (R1-BKD-060). kHost: host-visible coherent memory, cached where
+// the device offers it (the host writes and reads it; the default). kUpload: what the host writes
+// and the device reads again and again (a frame's hierarchy, parameters): device-local memory the
+// host can map where there is some, else kHost. kScratch: what only the device writes and reads
+// (a pass's intermediate samples): device-local, not mapped unless that memory is host-visible
+// anyway (lavapipe); buffer_write and buffer_read refuse an unmapped buffer. $R1_VULKAN_MEMORY=host
+// makes every buffer kHost. On a CPU device every kind is the same memory.
+enum class Residence { kHost, kUpload, kScratch };
+
 struct Slot {
   std::uint32_t binding = 0;  // layout(set = 0, binding = N) in the shader, N < kSlots
   std::uint32_t buffer = 0;
@@ -50,13 +59,14 @@ class Context {
 
   const DeviceInfo& info() const;
 
-  Result<std::uint32_t> buffer_create(std::size_t bytes);
+  Result<std::uint32_t> buffer_create(std::size_t bytes, Residence where = Residence::kHost);
   std::size_t buffer_size(std::uint32_t id) const;  // 0 for no such buffer
   // Frees the buffer's memory; its id then names no buffer (a no-op for an id that names none).
   void buffer_release(std::uint32_t id);
   // Makes `id` name a buffer of at least `bytes` (a quarter more when it grows, within the
-  // storage range): kept when it is big enough, else released and replaced. 0 names none yet.
-  Status buffer_ensure(std::uint32_t& id, std::size_t bytes);
+  // storage range) with the residence asked for: kept when it is big enough and was asked for with
+  // the same residence, else released and replaced. 0 names none yet.
+  Status buffer_ensure(std::uint32_t& id, std::size_t bytes, Residence where = Residence::kHost);
   Status buffer_write(std::uint32_t id, std::span<const std::uint8_t> data, std::size_t offset);
   Result<std::vector<std::uint8_t>> buffer_read(std::uint32_t id, std::size_t offset, std::size_t size);
 
@@ -433,8 +443,9 @@ struct SplatData {
 // front-to-back composite with the splats and the opaque layer (4 doubles a pixel: t, colour),
 // into RGBA (4 floats a pixel) and flow (3 floats a pixel, left empty when every pixel's is 0).
 // A ray that meets more candidate nodes than the shader holds (max_candidates) is left to the
-// host: its index is listed in host_pixels and its RGBA is not written. The walk needs no stack
-// (next-sibling and parent links).
+// host, its index listed in host_pixels and its RGBA not written; with the neural field such a
+// ray stays on the device and walks the hierarchy again at each sample (rewalked()). The walk
+// needs no stack (next-sibling and parent links).
 class CompositePass {
  public:
   // 64: with 160, lavapipe (Mesa 22.3) returned wrong samples for rays holding more than about 64
@@ -448,6 +459,8 @@ class CompositePass {
   // The samples the last draw inferred the neural field at: every sample a candidate reaches,
   // also those past the march's early end, which the host never evaluates.
   std::uint64_t inferred() const { return inferred_; }
+  // The rays of the last draw past the candidate cap that the neural field walked again per sample.
+  std::uint64_t rewalked() const { return rewalked_; }
   // The network's raw outputs (7 floats each) at `queries` (x, y, z, sigma each): the inference
   // pass alone, as the frame runs it.
   Result<std::vector<float>> infer(const NeuralData& n, std::span<const double> queries);
@@ -462,7 +475,7 @@ class CompositePass {
   Result<std::array<std::uint32_t, 12>> upload_neural(const NeuralData& n, std::uint32_t slots);
   std::uint32_t pipeline_ = 0, infer_ = 0;
   std::array<std::uint32_t, 14> buffers_{};
-  std::uint64_t inferred_ = 0;
+  std::uint64_t inferred_ = 0, rewalked_ = 0;
 };
 
 }  // namespace r1::vk
