@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "bench_chart.hpp"
+#include "image_size.hpp"
 #include "bench_child.hpp"
 #include "commands.hpp"
 #include "r1/backends/registry.hpp"
@@ -69,16 +70,6 @@ struct Run {
 };
 
 // ---- options ------------------------------------------------------------------------------
-
-Result<std::pair<int, int>> parse_size(const std::string& text) {
-  const auto x = text.find('x');
-  int w = 0, h = 0;
-  const char* end = text.data() + text.size();
-  if (x == std::string::npos || std::from_chars(text.data(), text.data() + x, w).ptr != text.data() + x ||
-      std::from_chars(text.data() + x + 1, end, h).ptr != end || w < 1 || h < 1 || w > 16384 || h > 16384)
-    return Status::input("bench: --size must be WIDTHxHEIGHT, each 1..16384 (got '" + text + "')");
-  return std::pair<int, int>{w, h};
-}
 
 // One --gen item: KIND (the kind's defaults), KIND:N for kinds that take --n, KIND:WxH or
 // KIND:AxBxC for grid and torus (R1-BEN-003).
@@ -401,7 +392,7 @@ bool is_bench_dir(const fs::path& dir) { return manifest_format_is(dir, kBenchFo
 
 Status run_bench(const BenchOptions& o) {
   // Everything that can be wrong with the command line is found before any work (R1-BEN-004).
-  R1_ASSIGN(const auto size, parse_size(o.size));
+  R1_ASSIGN(const auto size, parse_image_size(o.size, "bench: --size"));
   std::vector<Input> inputs;
   for (const auto& path : o.snapshots) {
     Input in;
@@ -647,7 +638,7 @@ struct FrameOptions {
 // The default view of `r1 render EPOCH --size WxH`, through the backend's frame stage; prints
 // {"frame_s": ...} with the frame stage's own time at full precision (R1-BEN-021).
 Status run_bench_frame(const FrameOptions& o) {
-  R1_ASSIGN(const auto size, parse_size(o.size));
+  R1_ASSIGN(const auto size, parse_image_size(o.size, "bench: --size"));
   R1_ASSIGN(auto backend, backends::make_backend(o.backend));
   R1_ASSIGN(const Epoch e, read_epoch(o.dir));
   if (e.ids.empty()) return Status::input(o.dir + ": the epoch has no particles");

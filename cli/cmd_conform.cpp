@@ -7,6 +7,7 @@
 
 #include "backend_option.hpp"
 #include "commands.hpp"
+#include "image_size.hpp"
 #include "r1/backends/device.hpp"
 #include "r1/backends/registry.hpp"
 #include "r1/conformance/conform.hpp"
@@ -19,6 +20,7 @@ namespace {
 struct ConformCliOptions {
   BackendOption backend;
   std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000", tinf_field = "analytic";
+  std::string tinf_march = "literal", tinf_size = "480x270";
   std::uint32_t tinf_field_steps = 200;
   std::string out = "r1_conformance.toml";
   bool list = false;
@@ -60,6 +62,10 @@ Status run_conform(const ConformCliOptions& o) {
   R1_ASSIGN(co.tinf_sizes, parse_sizes(o.tinf_sizes));
   if (o.tinf_field != "analytic" && o.tinf_field != "neural") return Status::input("conform: --tinf-field must be analytic or neural");
   co.tinf_neural = o.tinf_field == "neural";
+  if (o.tinf_march != "literal" && o.tinf_march != "skipping") return Status::input("conform: --tinf-march must be literal or skipping");
+  co.tinf_literal = o.tinf_march == "literal";
+  R1_ASSIGN(const auto tinf_wh, parse_image_size(o.tinf_size, "conform: --tinf-size"));
+  co.tinf_width = tinf_wh.first, co.tinf_height = tinf_wh.second;
   co.tinf_field_steps = o.tinf_field_steps;
   if (!o.tinf_epochs.empty()) {
     std::istringstream in(o.tinf_epochs);
@@ -117,6 +123,9 @@ void add_conform(CLI::App& app, Runner& selected) {
   cmd->add_option("--tinf-sizes", o->tinf_sizes, "BA graph sizes generated for P_RENDER_TINF (default 1000,10000)");
   cmd->add_option("--tinf-field-steps", o->tinf_field_steps, "with --tinf-field neural: Adam steps of each training (200)")
       ->check(CLI::Range(1u, 1000000u));
+  cmd->add_option("--tinf-march", o->tinf_march,
+                  "with --tinf-field neural: literal (every pixel's 128 samples, R1-NRF-033; default) or skipping (the samples some node reaches)");
+  cmd->add_option("--tinf-size", o->tinf_size, "P_RENDER_TINF's frame WIDTHxHEIGHT (480x270)");
   cmd->add_option("--tinf-field", o->tinf_field, "P_RENDER_TINF's far field: analytic (the backend's frames, default) or neural (trained per epoch, reference renderer)");
   cmd->add_option("-o,--output", o->out, "sidecar to write (default r1_conformance.toml)");
   cmd->add_flag("--list", o->list, "list the built backends and exit");

@@ -11,6 +11,7 @@
 
 #include "backend_option.hpp"
 #include "commands.hpp"
+#include "image_size.hpp"
 #include "progress.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/epoch_io.hpp"
@@ -34,7 +35,7 @@ struct RenderCliOptions {
   std::vector<double> eye, target, up;
   double fov = 0, time = 0, distance = 0;
   bool no_edges = false, no_labels = false, no_field = false, quiet = false, legibility = false;
-  std::string field = "analytic", field_file;
+  std::string field = "analytic", field_file, march = "skipping";
   std::string path, write_path;  // R1-VIEW-050: a camera path (warp:QUERY, follow:SECONDS) and its poses
   double fps = 30;
   BackendOption backend;
@@ -75,17 +76,6 @@ Status run_train_field(const TrainFieldOptions& o) {
                 "(loss %.4g -> %.4g); %.2f s in all\n",
                 path.c_str(), f.config.levels, f.config.log2_table, f.config.hidden, bytes.size(), f.config.steps,
                 f.config.batch, f.config.samples, train_s, f.loss_first, f.loss_last, seconds_since(t0));
-  return Status::ok();
-}
-
-Status parse_size(const std::string& text, render::View& v) {
-  const auto x = text.find('x');
-  int w = 0, h = 0;
-  const char* end = text.data() + text.size();
-  if (x == std::string::npos || std::from_chars(text.data(), text.data() + x, w).ptr != text.data() + x ||
-      std::from_chars(text.data() + x + 1, end, h).ptr != end || w < 1 || h < 1 || w > 16384 || h > 16384)
-    return Status::input("render: --size must be WIDTHxHEIGHT, each 1..16384 (e.g. 1920x1080)");
-  v.width = w, v.height = h;
   return Status::ok();
 }
 
@@ -198,6 +188,8 @@ Status run_render(const RenderCliOptions& c) {
   // --field neural (R1-NRF-031): the trained field draws pure T-infinity frames, with the
   // reference renderer (no backend's passes draw it yet).
   if (c.field != "analytic" && c.field != "neural") return Status::input("render: --field must be analytic or neural");
+  if (c.march != "skipping" && c.march != "literal") return Status::input("render: --march must be skipping or literal");
+  if (c.march == "literal" && c.field != "neural") return Status::input("render: --march literal is the neural field's march: add --field neural");
   render::NeuralField neural;
   std::string neural_bytes;
   const bool use_neural = c.field == "neural";
@@ -222,7 +214,10 @@ Status run_render(const RenderCliOptions& c) {
   if (!c.view_file.empty()) {
     R1_ASSIGN(base, render::read_view_file(c.view_file));
   }
-  if (!c.size.empty()) R1_TRY(parse_size(c.size, base));
+  if (!c.size.empty()) {
+    R1_ASSIGN(const auto wh, parse_image_size(c.size, "render: --size"));
+    base.width = wh.first, base.height = wh.second;
+  }
   if (c.fov != 0) base.camera.fov_deg = c.fov;
   if (c.time != 0) base.time = c.time;
   if (c.no_edges) base.edges = false;
@@ -269,6 +264,7 @@ Status run_render(const RenderCliOptions& c) {
     // reference renderer's content pass draws.
     render::RenderOptions ro;
     ro.neural_field = neural_bytes;
+    ro.field.literal = c.march == "literal";
     Result<render::Image> frame = use_content ? render::render_frame(scene, views[k], {}, &st, rows)
                                               : chosen.backend->render(e, views[k], ro, &st, rows);
     R1_ASSIGN(render::Image img, std::move(frame));
@@ -320,6 +316,8 @@ void add_render(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-field", c->no_field, "no T-infinity field (sub-pixel particles vanish)");
   cmd->add_option("--field", c->field, "T-infinity field: analytic (the oracle, default) or neural (trained by r1 train-field)");
   cmd->add_option("--field-file", c->field_file, "the trained field (default: EPOCH_DIR/field.nrf)");
+  cmd->add_option("--march", c->march,
+                  "the neural field's march: skipping (samples some node reaches, the default) or literal (every pixel's 128 samples, R1-NRF-033)");
   cmd->add_option("--path", c->path, "a camera path from the view: warp:QUERY (a title or hex id prefix) or follow:SECONDS; frames OUT-000 ...");
   cmd->add_option("--fps", c->fps, "frames per second along --path (30)");
   cmd->add_option("--write-path", c->write_path, "write the path's poses as JSON (without -o: only that)");

@@ -136,21 +136,29 @@ TEST_F(CliConform, NullFailsEveryCheck) {
 }
 
 // R1-CONF-064: with --tinf-field neural the far frames are the trained neural field's, drawn by
-// the reference renderer, and are held to the analytic frames over the covered pixels; the
-// check's comment says which field it measured.
+// the reference renderer with the literal march (R1-NRF-033) unless told, and are held to the
+// analytic frames over the covered pixels; the check's comment says which field and march it
+// measured and the frame size asked for.
 TEST_F(CliConform, TinfCanMeasureTheNeuralField) {
   r1::test::TempDir dir;
   const auto r = run_cli({"conform", "--backend", "reference", "--checks", "tinf", "--tinf-field", "neural", "--tinf-field-steps",
-                          "10", "--tinf-sizes", "200,400", "-o", (dir / "c.toml").string()});
+                          "10", "--tinf-sizes", "200,400", "--tinf-size", "64x36", "-o", (dir / "c.toml").string()});
   ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 4) << r.out << r.err;
   const std::string toml = r1::test::read_file(dir / "c.toml");
   EXPECT_NE(toml.find("P_RENDER_TINF = "), std::string::npos) << toml;
-  EXPECT_NE(toml.find("neural field, pure T-infinity"), std::string::npos) << toml;
+  EXPECT_NE(toml.find("neural field, literal march, pure T-infinity 64x36"), std::string::npos) << toml;
   EXPECT_NE(r.out.find("neural field trained in"), std::string::npos) << r.out;
   EXPECT_NE(toml.find("worst mean dE00 over covered pixels"), std::string::npos) << toml;
-  const auto bad = run_cli({"conform", "--checks", "tinf", "--tinf-field", "learned", "-o", (dir / "d.toml").string()});
-  EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_FALSE(fs::exists(dir / "d.toml"));
+  for (const std::vector<std::string>& wrong : {std::vector<std::string>{"--tinf-field", "learned"},
+                                                std::vector<std::string>{"--tinf-field", "neural", "--tinf-march", "sparse"},
+                                                std::vector<std::string>{"--tinf-size", "64by36"}}) {
+    std::vector<std::string> args{"conform", "--checks", "tinf", "-o", (dir / "d.toml").string()};
+    args.insert(args.end(), wrong.begin(), wrong.end());
+    const auto bad = run_cli(args);
+    EXPECT_EQ(bad.exit_code, 2) << wrong.back();
+    EXPECT_NE(bad.err.find(wrong[wrong.size() - 2]), std::string::npos) << bad.err;
+    EXPECT_FALSE(fs::exists(dir / "d.toml"));
+  }
 }
 
 // The environment chooses the backend when --backend is not given, and the report says so.

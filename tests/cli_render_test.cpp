@@ -79,6 +79,8 @@ TEST_F(CliRender, BadInputIsOneLineExitTwoAndWritesNothing) {
       {"render", epoch().string(), "--bogus", "-o", at("x.png").string()},
       {"render", epoch().string(), "--field", "fancy", "-o", at("x.png").string()},
       {"render", epoch().string(), "--field", "neural", "--field-file", at("missing.nrf").string(), "-o", at("x.png").string()},
+      {"render", epoch().string(), "--march", "literal", "-o", at("x.png").string()},
+      {"render", epoch().string(), "--field", "neural", "--march", "sparse", "-o", at("x.png").string()},
       {"train-field", at("nothing").string(), "-o", at("x.nrf").string()},
       {"train-field", epoch().string(), "--steps", "0", "-o", at("x.nrf").string()},
   };
@@ -110,6 +112,13 @@ TEST_F(CliRender, TrainFieldAndRenderWithIt) {
                at("f1.nrf").string(), "-o", at("far.png").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("field: neural"), std::string::npos) << r.out;
+  // The literal march (R1-NRF-033) draws the same view: every pixel's 128 samples.
+  r = run_cli({"render", epoch().string(), "--distance", "200000", "--size", "48x32", "--field", "neural", "--march", "literal",
+               "--field-file", at("f1.nrf").string(), "-o", at("far-literal.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("field: neural"), std::string::npos) << r.out;
+  r = run_cli({"diff", at("far-literal.png").string(), at("far.png").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
   r = run_cli({"render", epoch().string(), "--size", "48x32", "--field", "neural", "--field-file", at("f1.nrf").string(), "-o",
                at("near.png").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -322,9 +322,9 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
   const render::NeuralField* nf = host.field().scene->neural;
   vk::NeuralData nd;
   if (nf != nullptr && host.field().mixed.empty()) nd = neural_data(*nf);
-  if (nf != nullptr && host.field().mixed.empty() && !vk::CompositePass::infers(nd)) {
-    // A frame drawn with a neural field whose network the device does not infer (R1-BKD-076):
-    // the host draws every pixel with the reference's code.
+  if (nf != nullptr && host.field().mixed.empty() && (!vk::CompositePass::infers(nd) || host.field().params.literal)) {
+    // A frame drawn with a neural field whose network the device does not infer, or with the
+    // literal march (R1-BKD-076, R1-NRF-033): the host draws every pixel with the reference's code.
     left.resize(pixels);
     for (std::size_t k = 0; k < pixels; ++k) left[k] = static_cast<std::uint32_t>(k);
   } else {

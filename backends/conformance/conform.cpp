@@ -262,6 +262,7 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       v.labels = false;
       render::RenderOptions ro;
       ro.timings = false;
+      ro.field.literal = o.tinf_neural && o.tinf_literal;
       // With the neural field (R1-CONF-064) the field is trained for this epoch first (its time
       // reported, not counted) and the reference renderer draws with it.
       render::Scene neural_scene;
@@ -341,7 +342,8 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
     }
     const double spread = (hi - lo) / lo;
     rep.results.push_back({Check::kTinf, spread <= 0.10 && tinf_worst <= kPixelBound,
-                           std::string(o.tinf_neural ? "neural field, " : "") + "pure T-infinity " + std::to_string(o.tinf_width) + "x" +
+                           std::string(o.tinf_neural ? (o.tinf_literal ? "neural field, literal march, " : "neural field, skipping march, ") : "") +
+                               "pure T-infinity " + std::to_string(o.tinf_width) + "x" +
                                std::to_string(o.tinf_height) +
                                " frame times (particles: time) " + list + "; spread " + fixed(100 * spread, 0) +
                                "%, bound 10%; frames against the reference's: worst mean dE00 over covered pixels " + fixed(tinf_worst, 3) +

@@ -266,6 +266,32 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
   // only frames that are pure T-infinity (no node mixed with nearer tiers, R1-NRF-031).
   const bool neural = s.neural != nullptr && ff.mixed.empty();
   const double grow = p.cutoff * field_sigma(ff, t_end);
+  if (neural && p.literal) {
+    // The literal march (R1-NRF-033): the strata span the ray's chord through the ball about the
+    // field's cube that holds every kernel reaching into it, [t_c - r, t_c + r] with t_c the
+    // ray's closest approach to the cube's centre, also for a ray that misses the ball (whose
+    // samples no particle reaches), so every pixel costs the same.
+    const NeuralField& nf = *s.neural;
+    const double half = nf.size / 2;
+    const Vec3 centre = nf.lo + Vec3{half, half, half};
+    const double r = half * std::sqrt(3.0) + grow;
+    const double tc = dot(centre - ray.o, ray.d);
+    const double a = std::max(kNear, tc - r), b = std::min(t_end, std::max(tc + r, a + 2 * r));
+    const double delta = (b - a) / p.samples;
+    for (int i = 0; i < p.samples; ++i) {
+      const double t = a + (i + rng::uniform_double(s.seed, pixel, static_cast<std::uint64_t>(i))) * delta;
+      const double sigma = field_sigma(ff, t);
+      const Vec3 x = ray.at(t);
+      const FieldValue v = ff.neural ? ff.neural->evaluate(x, sigma) : nf.evaluate(x, sigma);
+      if (stats) ++stats->samples, ++stats->neural;
+      // Where no particle can reach, the analytic field is 0 (its kernels end at cutoff sigma,
+      // R1-RND-054) and so is this one; evaluated first all the same, so every sample costs one
+      // evaluation.
+      if (!(v.weight > 0) || !nf.may_reach(x, p.cutoff * sigma)) continue;
+      out.push_back({t, 1.0 - std::exp(-v.density * delta), v.color, v.flow});
+    }
+    return;
+  }
   // Candidates: nodes whose box grown by the widest kernel on this ray meets the ray (R1-RND-057).
   struct Candidate {
     int level;

@@ -266,7 +266,9 @@ NeuralField::PriorValue NeuralField::prior_at(const Vec3& x, double sigma) const
     const double r = s2 / v;
     const double d[3] = {x.x - p.centroid.x, x.y - p.centroid.y, x.z - p.centroid.z};
     const double q = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / (2.0 * v);
-    const double e = p.mass * r * std::sqrt(r) * std::exp(-q);
+    // exp(-q) is 0 in double beyond q = 745.2; skipping the call there gives the same sum without
+    // libm's underflow path, which made far parts cost more than near ones (R1-NRF-033).
+    const double e = q > 746 ? 0.0 : p.mass * r * std::sqrt(r) * std::exp(-q);
     sum += e;
     const double mean[3] = {p.colour.x, p.colour.y, p.colour.z};
     double c[3];
@@ -288,6 +290,16 @@ NeuralField::PriorValue NeuralField::prior_at(const Vec3& x, double sigma) const
   return out;
 }
 
+
+bool NeuralField::may_reach(const Vec3& x, double reach) const {
+  if (prior_parts.empty()) return true;
+  const Vec3 cell = prior_cells > 0 ? (prior_hi - prior_lo) * (1.0 / prior_cells) : Vec3{size, size, size};
+  const double r = reach + length(cell);
+  return std::any_of(prior_parts.begin(), prior_parts.end(), [&](const PriorPart& p) {
+    const Vec3 d = x - p.centroid;
+    return dot(d, d) <= r * r;
+  });
+}
 
 NeuralInference::NeuralInference(const NeuralField& f)
     : f_(f),

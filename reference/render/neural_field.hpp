@@ -56,6 +56,10 @@ struct NeuralField {
   // fields before version 4, whose one part is kept as it is).
   std::uint32_t prior_cells = 0;
   Vec3 prior_lo, prior_hi;
+  // Whether some particle may lie within `reach` of x, from the parts alone (R1-NRF-033): a
+  // part's particles share its grid cell, so each lies within a cell's diagonal of its centroid
+  // (fields without the grid: the cube's diagonal). Never false where a particle is in reach.
+  bool may_reach(const Vec3& x, double reach) const;
   // The prior at (x, sigma): its kernel sum, the parts' Gaussians convolved with the kernel (1 when
   // the field has none), and its colour over 3, each channel in [1e-3, 1 - 1e-3] (R1-NRF-008).
   struct PriorValue {

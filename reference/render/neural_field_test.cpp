@@ -13,7 +13,11 @@
 
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
+#include "image.hpp"
+#include "image_diff.hpp"
+#include "renderer.hpp"
 #include "scene.hpp"
+#include "view.hpp"
 #include "test_epochs.hpp"
 
 namespace {
@@ -222,6 +226,43 @@ TEST(NeuralField, AFarViewsFringeFollowsTheAnalyticField) {
     }
   EXPECT_LT(sum / count, 0.05) << "worst " << worst;
   EXPECT_LT(worst, 0.1) << "mean " << sum / count;
+}
+
+// R1-NRF-033: the literal march evaluates every pixel's 128 samples, whatever the graph and
+// whether the pixel's ray meets the field, so its work is the frame's pixels times the samples
+// (P_RENDER_TINF); the skipping march evaluates fewer. Its frame stays within R-1.0's bar of the
+// analytic field's (mean CIEDE2000 over the covered pixels at most 2).
+TEST(NeuralField, TheLiteralMarchEvaluatesEveryPixelsSamples) {
+  const r1::Epoch e = blob_epoch(400);
+  Scene s = make_scene(e);
+  auto f = train_small(s, 200, neural_seed(e.snapshot_digest));
+  ASSERT_TRUE(f.is_ok()) << f.status().message();
+  View base;
+  base.width = 64, base.height = 36;
+  base.edges = false, base.labels = false;
+  const View v = orbit_views(base, s.centroid, 40000, 1).front();
+  auto analytic = render_frame(s, v, {}, nullptr, {});
+  ASSERT_TRUE(analytic.is_ok()) << analytic.status().message();
+  s.neural = &*f;
+  FrameStats skipping, literal;
+  RenderOptions ro;
+  auto a = render_frame(s, v, ro, &skipping, {});
+  ro.field.literal = true;
+  auto b = render_frame(s, v, ro, &literal, {});
+  ASSERT_TRUE(a.is_ok() && b.is_ok());
+  const std::uint64_t all = 64u * 36u * static_cast<std::uint64_t>(ro.field.samples);
+  EXPECT_EQ(literal.field_neural, all);
+  EXPECT_GT(skipping.field_neural, 0u);
+  EXPECT_LT(skipping.field_neural, all / 2);
+  const auto bg = srgb8_to_linear(v.background);
+  auto want = display_srgb8(*analytic, bg);
+  auto got = display_srgb8(*b, bg);
+  ASSERT_TRUE(want.is_ok() && got.is_ok());
+  std::vector<float> heat;
+  diff_srgb8(*got, *want, v.width, v.height, {}, &heat);
+  const CoveredMean m = covered_mean_2000(*got, *want, heat, v.background);
+  EXPECT_GT(m.b_covered, 20u) << "the far view draws the field";
+  EXPECT_LE(m.mean_2000, 2.0);
 }
 
 // R1-NRF-050: a local update moves only grid entries at the corners of cells that meet its box

@@ -15,6 +15,10 @@ struct FieldParams {
   double cutoff = 5.0;       // nodes farther than cutoff * sigma are skipped (R1-RND-054)
   double theta = 0.25;       // a node with extent <= theta * sigma is one aggregate (R1-RND-054)
   double stop = 1e-3;        // the march ends when the field's transmittance falls below this
+  // The neural field's literal march (R-1.0 7.2, R1-NRF-033): every pixel's `samples` samples
+  // over its chord through the field's ball, no node walked, no sample skipped, no early end.
+  // Its work is the image's pixels times the samples, whatever the graph (P_RENDER_TINF).
+  bool literal = false;
 };
 
 // Options that do not belong in a view file.
