@@ -13,9 +13,9 @@
 #include <thread>
 
 #include "bench_chart.hpp"
-#include "image_size.hpp"
 #include "bench_child.hpp"
 #include "commands.hpp"
+#include "image_size.hpp"
 #include "r1/backends/registry.hpp"
 #include "r1/conformance/compare.hpp"
 #include "r1/reference/atomic_dir.hpp"

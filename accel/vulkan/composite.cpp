@@ -258,10 +258,11 @@ void main() {
           double a0 = 0.0LF, b0 = 0.0LF;
           bool o0 = false;
           near = walk(1u, pos, d, t_end, grow, theta, r_begin, r_end, from_tile, t, xs, reach, n0, a0, b0, o0);
-        }
-        for (int c = 0; c < nc && !near && !over; ++c) {
-          if (cand_t0[c] > t || cand_t1[c] < t) continue;
-          near = within_reach(xs, nvec(cand_node[c], 1u), node[cand_node[c] * 8u + 7u], reach);
+        } else {
+          for (int c = 0; c < nc && !near; ++c) {
+            if (cand_t0[c] > t || cand_t1[c] < t) continue;
+            near = within_reach(xs, nvec(cand_node[c], 1u), node[cand_node[c] * 8u + 7u], reach);
+          }
         }
         if (!near) continue;
         uint e = px * p.samples + n_entries;
@@ -621,7 +622,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   prm[20] = exp_.log2e, prm[21] = exp_.ln2_hi, prm[22] = exp_.ln2_lo;
   std::copy(exp_.taylor.begin(), exp_.taylor.end(), prm.begin() + 23);
   // What the host writes once a frame and every ray reads lives on the device where it can
-  // (R1-BKD-060); the samples and the network's outputs at them never leave it.
+  // (R1-BKD-061); the samples and the network's outputs at them never leave it.
   const auto ensure_write = [&](std::size_t which, auto span) -> Status {
     R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16), Residence::kUpload));
     return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);

@@ -112,7 +112,7 @@ struct Context::State {
     if (instance != VK_NULL_HANDLE) vkDestroyInstance(instance, nullptr);
   }
 
-  // The memory type for a buffer of `bits` in the order `where` prefers (R1-BKD-060); candidates
+  // The memory types for a buffer of `bits` in the order `where` prefers (R1-BKD-061); those
   // after the first are fall-backs when an allocation fails.
   std::vector<std::uint32_t> memory_types(std::uint32_t bits, Residence where) const {
     constexpr VkMemoryPropertyFlags kLocal = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, kVisible = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,

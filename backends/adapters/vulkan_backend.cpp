@@ -330,7 +330,10 @@ Status composite_on_device(PassState& st, const render::CompositeInput& in, rend
   } else {
     if (nf != nullptr && host.field().mixed.empty()) fd.neural = &nd;  // a pure T-infinity frame (R1-NRF-031)
     R1_TRY(st.composite.draw(camera_of(v, in.frame), fd, sd, opaque, image.rgba, flow, left));
-    if (fd.neural != nullptr) stats.field_neural = st.composite.inferred(), stats.field_rewalked = st.composite.rewalked();
+    if (fd.neural != nullptr) {
+      stats.field_neural = st.composite.inferred();
+      stats.field_rewalked = st.composite.rewalked();
+    }
   }
   stats.host_pixels = left.size();
   for (const std::uint32_t k : left) {

@@ -290,7 +290,6 @@ NeuralField::PriorValue NeuralField::prior_at(const Vec3& x, double sigma) const
   return out;
 }
 
-
 bool NeuralField::may_reach(const Vec3& x, double reach) const {
   if (prior_parts.empty()) return true;
   const Vec3 cell = prior_cells > 0 ? (prior_hi - prior_lo) * (1.0 / prior_cells) : Vec3{size, size, size};

@@ -28,7 +28,7 @@ struct DeviceInfo {
   bool graphics = false;       // a graphics queue and dynamic rendering: the raster calls work
 };
 
-// Where a buffer's memory lives (R1-BKD-060). kHost: host-visible coherent memory, cached where
+// Where a buffer's memory lives (R1-BKD-061). kHost: host-visible coherent memory, cached where
 // the device offers it (the host writes and reads it; the default). kUpload: what the host writes
 // and the device reads again and again (a frame's hierarchy, parameters): device-local memory the
 // host can map where there is some, else kHost. kScratch: what only the device writes and reads
