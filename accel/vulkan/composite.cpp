@@ -295,7 +295,8 @@ void main() {
             precise double dy = xs.y - prm[pb + 3u];
             precise double dz = xs.z - prm[pb + 4u];
             precise double q = (dx * dx + dy * dy + dz * dz) / (2.0LF * v);
-            precise double ek = prm[pb] * r * sqrt(r) * det_exp(-q);
+            // Past q = 500 the part adds 0 (R1-NRF-007's limit, as the host's prior_at).
+            precise double ek = prm[pb] * r * sqrt(r) * (det_exp(-min(q, 500.0LF)) * (q <= 500.0LF ? 1.0LF : 0.0LF));
             sum += ek;
             double ck[3];
             for (uint c = 0u; c < 3u; ++c) {
