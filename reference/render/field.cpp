@@ -54,6 +54,7 @@ struct Accumulator {
     FieldValue v;
     v.weight = w;
     v.density = kappa / sigma * w;
+    v.kernels = kernels;
     if (w > 0) {
       v.color = c / w;
       v.flow = f / w;
@@ -222,7 +223,12 @@ FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {
   return acc.value(ff.params.kappa, sigma);
 }
 
-FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma) {
+namespace {
+
+// The walk of R1-RND-054 with its acceptance as a parameter: `accept(node, sigma, distance)`
+// says whether a node within reach is one Gaussian, given the distance from x to its centroid.
+template <class Accept>
+FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept accept) {
   const Scene& s = *ff.scene;
   Accumulator acc;
   const double inv = 1.0 / (2 * sigma * sigma);
@@ -235,7 +241,7 @@ FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma)
     const auto L = static_cast<std::size_t>(l);
     const NodeField nd = ff.node(l, id);
     if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
-    if (nd.extent <= ff.params.theta * sigma) {
+    if (accept(nd, sigma, x)) {
       acc.add(nd.weight, nd.centroid, nd.color, x, inv);
       continue;
     }
@@ -246,6 +252,51 @@ FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma)
     for (std::uint32_t c : s.hierarchy->levels[L][id].children) stack.push_back({l - 1, c});
   }
   return acc.value(ff.params.kappa, sigma);
+}
+
+// R1-RND-060's table: M(u0) = the least upper bound over u >= u0 of max(g(u), h(u) / h_max), with
+// g(u) = e^(-u^2/2) max(1, |u^2 - 1|) (sigma^2 times the Gaussian's Hessian norm at distance u
+// sigma) and h(u) = u (2 e^(-u^2/2) + g(u)) (the same for the flow's numerator), at u0 = i / 32.
+// Sampled every 1/1024 and taken as a suffix maximum, so M at floor(32 u0) / 32 bounds the supremum
+// from u0 on. M(0) = 1: near x it is the plain rule.
+constexpr int kGradedSteps = 32, kGradedFine = 1024;
+constexpr double kGradedEnd = 8.0;
+const std::vector<double>& graded_table() {
+  static const std::vector<double> table = [] {
+    const int fine = static_cast<int>(kGradedEnd * kGradedFine);
+    auto g = [](double u) { return std::exp(-0.5 * u * u) * std::max(1.0, std::fabs(u * u - 1)); };
+    auto h = [&](double u) { return u * (2 * std::exp(-0.5 * u * u) + g(u)); };
+    double h_max = 0;
+    for (int i = 0; i <= fine; ++i) h_max = std::max(h_max, h(static_cast<double>(i) / kGradedFine));
+    std::vector<double> sup(static_cast<std::size_t>(fine) + 2, 0.0);
+    for (int i = fine; i >= 0; --i) {
+      const double u = static_cast<double>(i) / kGradedFine;
+      sup[static_cast<std::size_t>(i)] = std::max({sup[static_cast<std::size_t>(i) + 1], g(u), h(u) / h_max});
+    }
+    std::vector<double> out(static_cast<std::size_t>(kGradedEnd * kGradedSteps) + 1);
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = sup[i * (kGradedFine / kGradedSteps)];
+    return out;
+  }();
+  return table;
+}
+
+}  // namespace
+
+FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma) {
+  const double limit = ff.params.theta * sigma;
+  return walk_field(ff, x, sigma, [limit](const NodeField& nd, double, const Vec3&) { return nd.extent <= limit; });
+}
+
+FieldValue field_graded(const FieldFrame& ff, const Vec3& x, double sigma) {
+  const std::vector<double>& table = graded_table();
+  const double limit2 = (ff.params.theta * sigma) * (ff.params.theta * sigma);
+  return walk_field(ff, x, sigma, [&](const NodeField& nd, double s, const Vec3& at) {
+    const double e2 = nd.extent * nd.extent;
+    if (e2 <= limit2) return true;  // the plain rule (M <= 1 at every distance)
+    const double gap = std::max(0.0, length(at - nd.centroid) - nd.extent) / s;
+    const auto i = static_cast<std::size_t>(std::min(gap, kGradedEnd) * kGradedSteps);
+    return e2 * table[i] <= limit2;
+  });
 }
 
 double field_error_bound(const FieldFrame& ff, double sigma) {

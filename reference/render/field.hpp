@@ -19,6 +19,7 @@ struct FieldValue {
   Vec3 color;          // linear light
   Vec3 flow;           // mean-shift vector (R1-RND-053), scene units
   double weight = 0;   // sum of weight * kernel (for tests)
+  std::uint64_t kernels = 0;  // kernels evaluated (nodes and particles; for tests)
 };
 
 // A node as the field sees it this frame (R1-RND-054): over its members with field weight > 0,
@@ -84,6 +85,10 @@ double field_sigma(const FieldFrame& ff, double t);
 // The field at x with kernel width sigma: exactly (every particle) or through the hierarchy.
 FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma);
 FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma);
+// The same field with R1-RND-060's acceptance graded by distance: a node farther from x may be
+// wider than theta sigma, as far as the kernel's curvature there allows, within the same bound
+// (field_error_bound). The neural field's training targets; frames keep field_hierarchical.
+FieldValue field_graded(const FieldFrame& ff, const Vec3& x, double sigma);
 // The documented bound on |rho_hier - rho_exact| (R1-RND-055) at this sigma.
 double field_error_bound(const FieldFrame& ff, double sigma);
 

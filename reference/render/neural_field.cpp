@@ -484,7 +484,7 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
           x = Vec3{std::clamp(x.x, box->first.x, top.x), std::clamp(x.y, box->first.y, top.y), std::clamp(x.z, box->first.z, top.z)};
         }
       }
-      const FieldValue v = field_hierarchical(ff, x, sigma);
+      const FieldValue v = field_graded(ff, x, sigma);
       Sample& smp = set[k];
       smp.q = make_query(f, x, sigma);
       const NeuralField::PriorValue pv = f.prior_at(x, sigma);
