@@ -68,6 +68,14 @@ void add_members(const FieldFrame& ff, std::uint32_t id, const Vec3& x, double i
   const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
   const std::uint32_t slot = ff.slot[0].empty() ? FieldFrame::kFarSlot : ff.slot[0][id];
   if (slot == FieldFrame::kBehindSlot) return;
+  if (slot == FieldFrame::kFarSlot && !ff.far_range.empty()) {
+    const auto [begin, end] = ff.far_range[id];
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const FieldFrame::Member& m = ff.members_far[k];
+      acc.add(m.weight, m.position, m.color, x, inv2s2, max_q);
+    }
+    return;
+  }
   if (slot == FieldFrame::kFarSlot) {
     const Scene& s = *ff.scene;
     const double n = s.n;
@@ -104,6 +112,7 @@ NodeField FieldFrame::node(int level, std::uint32_t id) const {
   const std::uint32_t k = slot[L].empty() ? kFarSlot : slot[L][id];
   if (k == kBehindSlot) return {};
   if (k != kFarSlot) return mixed[k];
+  if (!far_nodes[L].empty()) return far_nodes[L][id];
   const NodeData& d = scene->nodes[L][id];
   return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent};
 }

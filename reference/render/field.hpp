@@ -66,6 +66,14 @@ struct FieldFrame {
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   FieldParams params;
+  // Of a far-field frame (far_field_frame, every node at its scene aggregate): the aggregates as
+  // node() returns them, per level and node, and per level-0 node its members with weight > 0 in
+  // member order, members_far[far_range[id].first .. far_range[id].second), laid out for the walk
+  // (a node's read is one cache line, a leaf's members contiguous). The same values, so the same
+  // bits, as reading the scene. Empty in the frames of a view.
+  std::array<std::vector<NodeField>, kLevels> far_nodes;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> far_range;
+  std::vector<Member> members_far;
   // The scene's neural field made ready for the frame's evaluations (R1-NRF-031), when it has one.
   std::shared_ptr<const NeuralInference> neural;
 

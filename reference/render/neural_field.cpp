@@ -348,6 +348,23 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
   FieldFrame ff;
   ff.scene = &s;
   ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
+  // The walk's copies (FieldFrame::far_nodes): what node() and the leaves would read of the scene.
+  std::array<std::vector<NodeField>, kLevels> nodes;  // read through node() before far_nodes is set
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    nodes[l].reserve(s.nodes[l].size());
+    for (std::uint32_t id = 0; id < s.nodes[l].size(); ++id) nodes[l].push_back(ff.node(static_cast<int>(l), id));
+  }
+  ff.far_nodes = std::move(nodes);
+  const double n = s.n;
+  ff.far_range.reserve(s.nodes[0].size());
+  for (const auto& leaf : s.hierarchy->levels[0]) {
+    const auto begin = static_cast<std::uint32_t>(ff.members_far.size());
+    for (std::uint32_t q : leaf.children) {
+      const double w = n * s.phi[q];
+      if (w > 0) ff.members_far.push_back({s.position[q], s.color[q], w});
+    }
+    ff.far_range.push_back({begin, static_cast<std::uint32_t>(ff.members_far.size())});
+  }
   return ff;
 }
 
