@@ -234,8 +234,8 @@ FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {
 
 namespace {
 
-// The walk of R1-RND-054 with its acceptance as a parameter: `accept(node, sigma, distance)`
-// says whether a node within reach is one Gaussian, given the distance from x to its centroid.
+// The walk of R1-RND-054 with its acceptance as a parameter: `accept(node, sigma, x)` says
+// whether a node within reach of x is one Gaussian.
 template <class Accept>
 FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept accept) {
   const Scene& s = *ff.scene;
