@@ -33,6 +33,11 @@ bool within_reach(const Vec3& x, const Vec3& centroid, double extent, double rea
   return dot(d, d) <= (extent + reach) * (extent + reach);
 }
 
+// R1-RND-054's cut grows with the particle count so that the kernels it drops weigh at most
+// 1 / kCutoffMass of a mean particle's weight in all (n e^(-c^2/2) <= 1 / kCutoffMass, the weights
+// n phi summing to n): c = max(cutoff, sqrt(2 ln(kCutoffMass n))), the given 5 up to 8,385 particles.
+constexpr double kCutoffMass = 32.0;
+
 // Sums weight * exp(-|center - x|^2 / (2 sigma^2)); a kernel whose exponent exceeds max_q is
 // skipped (a particle farther than cutoff sigma: max_q = cutoff^2 / 2, within R1-RND-055's bound).
 struct Accumulator {
@@ -117,10 +122,16 @@ NodeField FieldFrame::node(int level, std::uint32_t id) const {
   return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent};
 }
 
-FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f, const FieldParams& p) {
+double field_cutoff(double cutoff, std::uint32_t n) {
+  return std::max(cutoff, std::sqrt(2.0 * std::log(kCutoffMass * static_cast<double>(n))));
+}
+
+FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f, const FieldParams& given) {
   FieldFrame ff;
   ff.scene = &s;
-  ff.params = p;
+  ff.params = given;
+  ff.params.cutoff = field_cutoff(given.cutoff, s.n);
+  const FieldParams& p = ff.params;
   ff.frame = f;
   ff.camera = v.camera.position;
   ff.tiers = v.tiers;

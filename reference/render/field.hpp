@@ -85,7 +85,12 @@ struct FieldFrame {
 };
 
 double tinf_weight(double s, const Tiers& t);
+// The frame's field parameters are `p` with the cut of R1-RND-054 for the scene's particle count
+// (field_cutoff).
 FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f, const FieldParams& p = {});
+// R1-RND-054's cut for n particles: `cutoff` (5), or more where the kernels it would drop add up
+// to over 1/32 of a mean particle's weight: max(cutoff, sqrt(2 ln(32 n))).
+double field_cutoff(double cutoff, std::uint32_t n);
 
 // Kernel width at ray distance t (R1-RND-051): sqrt(tau_cam t / t_far), at least half a pixel.
 double field_sigma(const FieldFrame& ff, double t);

@@ -348,6 +348,7 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
   FieldFrame ff;
   ff.scene = &s;
   ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
+  ff.params.cutoff = field_cutoff(p.cutoff, s.n);  // as a view's frame has it (R1-RND-054)
   // The walk's copies (FieldFrame::far_nodes): what node() and the leaves would read of the scene.
   std::array<std::vector<NodeField>, kLevels> nodes;  // read through node() before far_nodes is set
   for (std::size_t l = 0; l < kLevels; ++l) {

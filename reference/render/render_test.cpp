@@ -406,6 +406,40 @@ TEST(Field, HierarchicalEvaluationIsWithinItsBound) {
   EXPECT_LT(kernels[1], kernels[0]) << "the graded walk evaluates fewer kernels";
 }
 
+// R1-RND-054's cut grows with the particle count: what it drops weighs at most 1/32 of a mean
+// particle in all, so a large scene's rim, where the field is the sum of many far tails, keeps
+// its weight (the 10^6-particle far disc drew 0.5 of its kernel sum at the rim with a cut at 5).
+TEST(Field, TheCutDropsAtMostAThirtySecondOfAMeanParticle) {
+  for (std::uint32_t n : {1u, 1000u, 8385u}) EXPECT_EQ(field_cutoff(5, n), 5.0) << n;
+  for (std::uint32_t n : {8386u, 20000u, 1000000u, 4294967295u}) {
+    const double c = field_cutoff(5, n);
+    EXPECT_GT(c, 5.0) << n;
+    EXPECT_LE(static_cast<double>(n) * std::exp(-0.5 * c * c), (1.0 / 32) * (1 + 1e-12)) << n;
+  }
+  const r1::Epoch e = make_epoch(random_cloud(20000, 3), 2, r1::Shape::kSphere);
+  const Scene s = make_scene(e);
+  View v = lone_view({0, 0, 30000}, 0);
+  const CameraFrame f = camera_frame(v);
+  const FieldFrame cut = make_field_frame(s, v, f);
+  FieldParams none;
+  none.cutoff = 1e3;
+  const FieldFrame uncut = make_field_frame(s, v, f, none);
+  ASSERT_EQ(cut.params.cutoff, field_cutoff(5, 20000));
+  std::mt19937_64 g(4);
+  std::normal_distribution<double> d(0, 1);
+  double worst = 0;
+  for (int k = 0; k < 200; ++k) {
+    const Vec3 dir = normalize(Vec3{d(g), d(g), d(g)});
+    const Vec3 x = dir * (900.0 + 3.0 * static_cast<double>(k));  // the cloud's rim and beyond (spread 300)
+    for (double sigma : {20.0, 60.0}) {
+      const double a = field_hierarchical(cut, x, sigma).weight, b = field_hierarchical(uncut, x, sigma).weight;
+      ASSERT_LE(std::fabs(a - b), 1.0 / 32 + 1e-12 * b) << k << " sigma " << sigma;
+      worst = std::max(worst, std::fabs(a - b));
+    }
+  }
+  RecordProperty("worst_dropped_weight", std::to_string(worst));
+}
+
 // R1-RND-057: a ray walks only the top-level nodes binned to its tile, and gets exactly the
 // samples it gets walking them all, over every pixel of views inside, near and far from the cloud.
 TEST(Field, TileListsChangeNoSample) {
