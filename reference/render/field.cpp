@@ -277,10 +277,11 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
 // R1-RND-060's table: M(u0) = the least upper bound over u >= u0 of max(g(u), h(u) / h_max), with
 // g(u) = e^(-u^2/2) max(1, |u^2 - 1|) (sigma^2 times the Gaussian's Hessian norm at distance u
 // sigma) and h(u) = u (2 e^(-u^2/2) + g(u)) (the same for the flow's numerator), at u0 = i / 32.
-// Sampled every 1/1024 and taken as a suffix maximum, so M at floor(32 u0) / 32 bounds the supremum
-// from u0 on. M(0) = 1: near x it is the plain rule.
+// Sampled every 1/1024 and taken as a suffix maximum plus 0.002 (g and h / h_max move by under
+// 0.001 within a sample step), so M at floor(32 u0) / 32 is at least the supremum from u0 on.
+// Near x it is the plain rule (M(0) > 1, and a node within theta sigma is taken whole anyway).
 constexpr int kGradedSteps = 32, kGradedFine = 1024;
-constexpr double kGradedEnd = 8.0;
+constexpr double kGradedEnd = 8.0, kGradedMargin = 0.002;
 const std::vector<double>& graded_table() {
   static const std::vector<double> table = [] {
     const int fine = static_cast<int>(kGradedEnd * kGradedFine);
@@ -294,7 +295,7 @@ const std::vector<double>& graded_table() {
       sup[static_cast<std::size_t>(i)] = std::max({sup[static_cast<std::size_t>(i) + 1], g(u), h(u) / h_max});
     }
     std::vector<double> out(static_cast<std::size_t>(kGradedEnd * kGradedSteps) + 1);
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = sup[i * (kGradedFine / kGradedSteps)];
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = sup[i * (kGradedFine / kGradedSteps)] + kGradedMargin;
     return out;
   }();
   return table;
