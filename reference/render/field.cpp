@@ -245,8 +245,8 @@ FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {
 
 namespace {
 
-// The walk of R1-RND-054 with its acceptance as a parameter: `accept(node, sigma, x)` says
-// whether a node within reach of x is one Gaussian.
+// The walk of R1-RND-054 with its acceptance as a parameter: `accept(node)` says whether a node
+// within reach of x is one Gaussian.
 template <class Accept>
 FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept accept) {
   const Scene& s = *ff.scene;
@@ -261,7 +261,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
     const auto L = static_cast<std::size_t>(l);
     const NodeField nd = ff.node(l, id);
     if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
-    if (accept(nd, sigma, x)) {
+    if (accept(nd)) {
       acc.add(nd.weight, nd.centroid, nd.color, x, inv);
       continue;
     }
@@ -305,16 +305,16 @@ const std::vector<double>& graded_table() {
 
 FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma) {
   const double limit = ff.params.theta * sigma;
-  return walk_field(ff, x, sigma, [limit](const NodeField& nd, double, const Vec3&) { return nd.extent <= limit; });
+  return walk_field(ff, x, sigma, [limit](const NodeField& nd) { return nd.extent <= limit; });
 }
 
 FieldValue field_graded(const FieldFrame& ff, const Vec3& x, double sigma) {
   const std::vector<double>& table = graded_table();
   const double limit2 = (ff.params.theta * sigma) * (ff.params.theta * sigma);
-  return walk_field(ff, x, sigma, [&](const NodeField& nd, double s, const Vec3& at) {
+  return walk_field(ff, x, sigma, [&](const NodeField& nd) {
     const double e2 = nd.extent * nd.extent;
     if (e2 <= limit2) return true;  // the plain rule (M <= 1 at every distance)
-    const double gap = std::max(0.0, length(at - nd.centroid) - nd.extent) / s;
+    const double gap = std::max(0.0, length(x - nd.centroid) - nd.extent) / sigma;
     const auto i = static_cast<std::size_t>(std::min(gap, kGradedEnd) * kGradedSteps);
     return e2 * table[i] <= limit2;
   });
