@@ -453,13 +453,13 @@ TEST(FramePassesNeural, TheVulkanNeuralFieldIsTheReferencesFrame) {
   base.width = 96, base.height = 54;
   const std::vector<render::View> views = render::orbit_views(base, scene.centroid, 100000, 3);
   struct Arch {
-    std::uint32_t levels, log2_table, hidden;
+    std::uint32_t levels, log2_table, hidden, block;
     bool device;
   };
-  for (const Arch arch : {Arch{16, 15, 64, true}, Arch{8, 10, 16, true}, Arch{4, 8, 257, false}}) {
-    SCOPED_TRACE("hidden " + std::to_string(arch.hidden));
+  for (const Arch arch : {Arch{16, 15, 64, 0, true}, Arch{16, 15, 64, 32, true}, Arch{8, 10, 16, 0, true}, Arch{4, 8, 257, 0, false}}) {
+    SCOPED_TRACE("hidden " + std::to_string(arch.hidden) + ", block " + std::to_string(arch.block));
     render::NeuralConfig c;
-    c.levels = arch.levels, c.log2_table = arch.log2_table, c.hidden = arch.hidden;
+    c.levels = arch.levels, c.log2_table = arch.log2_table, c.hidden = arch.hidden, c.block = arch.block;
     c.samples = 1u << 12;
     c.batch = 1u << 10;
     c.steps = 12;
@@ -515,10 +515,14 @@ TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
   auto epoch = ba_epoch(300);
   ASSERT_TRUE(epoch.is_ok()) << epoch.status().message();
   const render::Scene scene = render::make_scene(*epoch);
+  // The network without and with the Clifford render block (R1-NRF-003).
+  for (const std::uint32_t block : {0u, 32u}) {
+  SCOPED_TRACE("block " + std::to_string(block));
   render::NeuralConfig c;
   c.samples = 1u << 12;
   c.batch = 1u << 10;
   c.steps = 12;
+  c.block = block;
   auto field = render::train_neural_field(scene, c, 3);
   ASSERT_TRUE(field.is_ok()) << field.status().message();
   const render::NeuralField& f = *field;
@@ -551,6 +555,7 @@ TEST(FramePassesNeural, TheDevicesInferenceIsTheReferencesEvaluation) {
   vk::NeuralData wide = backends::neural_data(f);
   wide.hidden = 300;
   EXPECT_FALSE(pass->infer(wide, queries).is_ok());
+  }
 }
 
 // The field and composite pass on the device (R1-BKD-070), through the backend: frames of one

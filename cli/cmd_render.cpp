@@ -44,6 +44,7 @@ struct RenderCliOptions {
 struct TrainFieldOptions {
   std::string dir, out;
   render::NeuralConfig config;
+  std::string block = "none";
   bool quiet = false;
 };
 
@@ -59,8 +60,10 @@ Status run_train_field(const TrainFieldOptions& o) {
   if (e.ids.empty()) return Status::input(o.dir + ": the epoch has no particles");
   const render::Scene scene = render::make_scene(e);
   const auto t1 = std::chrono::steady_clock::now();
+  render::NeuralConfig config = o.config;
+  config.block = o.block == "clifford" ? config.hidden / 2 : 0;
   R1_ASSIGN(const render::NeuralField f,
-            render::train_neural_field(scene, o.config, render::neural_seed(e.snapshot_digest), progress.sink()));
+            render::train_neural_field(scene, config, render::neural_seed(e.snapshot_digest), progress.sink()));
   const double train_s = seconds_since(t1);
   progress.finish();
   const std::string bytes = render::encode_neural_field(f, e.snapshot_digest);
@@ -72,9 +75,9 @@ Status run_train_field(const TrainFieldOptions& o) {
     R1_TRY(write_file_atomic(path, bytes));
   }
   if (!o.quiet)
-    std::printf("%s: neural field, %u levels x 2^%u entries, %u hidden, %zu bytes; %u steps of %u over %u samples in %.2f s "
+    std::printf("%s: neural field, %u levels x 2^%u entries, %u hidden%s, %zu bytes; %u steps of %u over %u samples in %.2f s "
                 "(loss %.4g -> %.4g); %.2f s in all\n",
-                path.c_str(), f.config.levels, f.config.log2_table, f.config.hidden, bytes.size(), f.config.steps,
+                path.c_str(), f.config.levels, f.config.log2_table, f.config.hidden, f.config.block > 0 ? " with the Clifford block" : "", bytes.size(), f.config.steps,
                 f.config.batch, f.config.samples, train_s, f.loss_first, f.loss_last, seconds_since(t0));
   return Status::ok();
 }
@@ -336,6 +339,8 @@ void add_train_field(CLI::App& app, Runner& selected) {
   cmd->add_option("--samples", o->config.samples, "training points (default 65536)")->check(CLI::Range(1u, 1u << 24));
   cmd->add_option("--batch", o->config.batch, "points per step (default 4096)")->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--threads", o->config.threads, "worker threads (default: every core; same bytes)");
+  cmd->add_option("--block", o->block, "the network between its hidden layers: clifford (R-1.0 7.1's render block) or none")
+      ->check(CLI::IsMember({"none", "clifford"}));
   cmd->add_flag("-q,--quiet", o->quiet, "no summary");
   cmd->callback([o, &selected] { selected = [o] { return run_train_field(*o); }; });
 }

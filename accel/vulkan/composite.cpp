@@ -15,6 +15,47 @@ namespace r1::vk {
 
 namespace {
 
+// det_exp (the reference's Cody-Waite reduction and degree-13 Taylor polynomial) with the Horner
+// steps written out and one return: lavapipe (Mesa 22.3) miscompiled the looped form when it was
+// called inside the sample loop, returning 0 for arguments near 0. EXPC[i] stands for the
+// shader's constant i: log2(e), the two parts of ln 2, then the 14 Taylor coefficients.
+constexpr const char* kDetExp = R"(
+double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
+double pow2(int k) { return packDouble2x32(uvec2(0u, uint(k + 1023) << 20)); }
+
+double det_exp(double x) {
+  precise double t = x * EXPC[0];
+  double tc = clamp(t, -2000.0LF, 2000.0LF);
+  int k = int(tc >= 0.0LF ? tc + 0.5LF : tc - 0.5LF);
+  double kd = double(k);
+  precise double r = (x - kd * EXPC[1]) - kd * EXPC[2];
+  // Horner from the degree-13 coefficient down, written out (no loop).
+  precise double q = ((((((((((((EXPC[16] * r + EXPC[15]) * r + EXPC[14]) * r + EXPC[13]) * r + EXPC[12]) * r + EXPC[11]) * r +
+                         EXPC[10]) * r + EXPC[9]) * r + EXPC[8]) * r + EXPC[7]) * r + EXPC[6]) * r + EXPC[5]) * r + EXPC[4]) * r + EXPC[3];
+  int k1 = k >= 0 ? k / 2 : -((-k) / 2);
+  int k2 = clamp(k - k1, -1022, 1023);
+  k1 = clamp(k1, -1022, 1023);
+  precise double a = q * pow2(k1);
+  precise double b = a * pow2(k2);
+  precise double direct = q * pow2(clamp(k, -1022, 1023));
+  double y = (k >= -1022 && k <= 1023) ? direct : b;
+  y = x < -746.0LF ? 0.0LF : y;
+  y = x > 710.0LF ? inf() : y;
+  y = isnan(x) ? x : y;
+  return y;
+}
+
+)";
+
+// The shader source with det_exp in place of R1_DET_EXP, its constants read from `constants`
+// (a buffer's name and the index of the first, as "prm[20 + ").
+std::string with_det_exp(std::string source, const std::string& constants) {
+  std::string det = kDetExp;
+  for (std::size_t at = det.find("EXPC["); at != std::string::npos; at = det.find("EXPC[", at)) det.replace(at, 5, constants);
+  source.replace(source.find("R1_DET_EXP"), 10, det);
+  return source;
+}
+
 constexpr const char* kComposite = R"(#version 460
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -42,34 +83,7 @@ layout(push_constant) uniform P {
 const int kMaxCand = R1_MAX_CANDIDATES;  // build() substitutes the cap
 const double kNear = 1e-3LF;
 
-double inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
-double pow2(int k) { return packDouble2x32(uvec2(0u, uint(k + 1023) << 20)); }
-
-// det_exp (the reference's Cody-Waite reduction and degree-13 Taylor polynomial) with the Horner
-// steps written out and one return: lavapipe (Mesa 22.3) miscompiled the looped form when it was
-// called inside the sample loop, returning 0 for arguments near 0.
-double det_exp(double x) {
-  precise double t = x * prm[20];
-  double tc = clamp(t, -2000.0LF, 2000.0LF);
-  int k = int(tc >= 0.0LF ? tc + 0.5LF : tc - 0.5LF);
-  double kd = double(k);
-  precise double r = (x - kd * prm[21]) - kd * prm[22];
-  // Horner from the degree-13 coefficient down, written out (no loop).
-  precise double q = ((((((((((((prm[36] * r + prm[35]) * r + prm[34]) * r + prm[33]) * r + prm[32]) * r + prm[31]) * r +
-                         prm[30]) * r + prm[29]) * r + prm[28]) * r + prm[27]) * r + prm[26]) * r + prm[25]) * r + prm[24]) * r + prm[23];
-  int k1 = k >= 0 ? k / 2 : -((-k) / 2);
-  int k2 = clamp(k - k1, -1022, 1023);
-  k1 = clamp(k1, -1022, 1023);
-  precise double a = q * pow2(k1);
-  precise double b = a * pow2(k2);
-  precise double direct = q * pow2(clamp(k, -1022, 1023));
-  double y = (k >= -1022 && k <= 1023) ? direct : b;
-  y = x < -746.0LF ? 0.0LF : y;
-  y = x > 710.0LF ? inf() : y;
-  y = isnan(x) ? x : y;
-  return y;
-}
-
+R1_DET_EXP
 // Philox4x32-10 (r1::rng::bits) and uniform_double.
 uint64_t rng_bits(uint64_t item, uint64_t dim) {
   uvec4 c = uvec4(uint(item), uint(item >> 32), uint(dim), uint(dim >> 32));
@@ -416,11 +430,25 @@ layout(std430, binding = 0) readonly buffer E { double entry[]; };
 layout(std430, binding = 1) readonly buffer C { uint entry_count[]; };
 layout(std430, binding = 2) readonly buffer W { float wt[]; };
 layout(std430, binding = 3) writeonly buffer O { float nout[]; };
-layout(std430, binding = 4) readonly buffer NP { double np[]; };  // lo, size, centroid, tau_lo, tau_hi, log2(tau_hi / tau_lo), fade power
+// lo, size, centroid, tau_lo, tau_hi, log2(tau_hi / tau_lo), fade power, then det_exp's constants
+layout(std430, binding = 4) readonly buffer NP { double np[]; };
 layout(std430, binding = 5) readonly buffer RS { uint res[]; };
 layout(push_constant) uniform P {
   uint pixels; uint slots; uint levels; uint table; uint hidden; uint inputs; uint w1; uint b1; uint w2; uint b2; uint w3; uint b3;
+  uint block; uint wc; uint bc; uint wg; uint bg; uint gamma;  // the Clifford block (R1-NRF-003): width d (0: none), offsets
 } p;
+
+R1_DET_EXP
+// The block's SiLU and sigmoid: r1's (R1-RND-101) in double on det_exp, rounded to float.
+float silu_f(float x) {
+  precise double r = double(x) / (1.0LF + det_exp(-double(x)));
+  return float(r);
+}
+float sigmoid_f(float x) {
+  precise double r = 1.0LF / (1.0LF + det_exp(-double(x)));
+  return float(r);
+}
+const uint kShifts[5] = uint[5](1u, 2u, 4u, 8u, 16u);
 
 const uint kPrime1 = 2654435761u, kPrime2 = 805459861u;
 uint invocation() { return gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u; }
@@ -450,6 +478,8 @@ uint corner_index(uint x, uint y, uint z, uint r) {
 float features[65];
 float h1[256];
 float h2[256];
+float cf[320];  // the block's features, 2 |S| d (d <= 32)
+float hg[64];   // [H | G]
 
 void main() {
   uint e = invocation();
@@ -509,6 +539,40 @@ void main() {
     acc += wt[p.b1 + jj];
     h1[jj] = max(acc, 0.0);
   }
+  if (p.block > 0u) {
+    // The Clifford render block (NeuralInference's block_row): H and C the halves of h1, the
+    // shifted inner and wedge products, G = Wc F + bc, the gate Wg [H | G] + bg, and h1 becomes
+    // [B | C].
+    uint d = p.block, nf = 10u * d;
+    for (uint k = 0u; k < 5u; ++k) {
+      uint s = kShifts[k] % d;
+      for (uint ch = 0u; ch < d; ++ch) {
+        uint j = ch + s < d ? ch + s : ch + s - d;
+        precise float pr = h1[ch] * h1[d + j];
+        precise float q = h1[j] * h1[d + ch];
+        cf[2u * k * d + ch] = silu_f(pr);
+        precise float wedge = pr - q;
+        cf[2u * k * d + d + ch] = wedge;
+      }
+    }
+    for (uint jj = 0u; jj < d; ++jj) {
+      precise float acc = 0.0;
+      uint row = p.wc + jj * nf;
+      for (uint i = 0u; i < nf; ++i) acc += cf[i] * wt[row + i];
+      acc += wt[p.bc + jj];
+      hg[d + jj] = acc;
+      hg[jj] = h1[jj];
+    }
+    for (uint jj = 0u; jj < d; ++jj) {
+      precise float acc = 0.0;
+      uint row = p.wg + jj * 2u * d;
+      for (uint i = 0u; i < 2u * d; ++i) acc += hg[i] * wt[row + i];
+      acc += wt[p.bg + jj];
+      precise float inner = silu_f(h1[jj]) + sigmoid_f(acc) * hg[d + jj];
+      precise float b = h1[jj] + wt[p.gamma + jj] * inner;
+      h1[jj] = b;
+    }
+  }
   for (uint jj = 0u; jj < p.hidden; ++jj) {
     precise float acc = 0.0;
     uint row = p.w2 + jj * p.hidden;
@@ -531,9 +595,10 @@ void main() {
 bool CompositePass::infers(const NeuralData& n) {
   const std::uint64_t in = n.inputs(), h = n.hidden;
   // Loop iterations an invocation runs (a level's 3 + 8, then the layers) below lavapipe's 65,535.
-  const std::uint64_t iterations = std::uint64_t{n.levels} * 11 + in * h + h * h + 7 * h + 2 * h + 7;
+  const std::uint64_t d = n.block, block_iterations = 5 * d + d * 10 * d + d * 2 * d;
+  const std::uint64_t iterations = std::uint64_t{n.levels} * 11 + in * h + h * h + 7 * h + 2 * h + 7 + block_iterations;
   return n.levels >= 1 && n.levels <= 32 && h >= 1 && h <= 256 && n.log2_table >= 1 && n.log2_table <= 24 &&
-         n.resolution.size() == n.levels && iterations <= 60000;
+         n.resolution.size() == n.levels && iterations <= 60000 && (d == 0 || (d <= 32 && h == 2 * d));
 }
 
 Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& constants, std::uint32_t max_candidates) {
@@ -546,29 +611,32 @@ Result<CompositePass> CompositePass::build(Context& ctx, const ExpConstants& con
   const std::string key = "R1_MAX_CANDIDATES", ray = "R1_PIXEL_RAY";
   source.replace(source.find(key), key.size(), std::to_string(max_candidates));
   source.replace(source.find(ray), ray.size(), detail::kPixelRay);
-  R1_ASSIGN(pass.pipeline_, ctx.compute_compile(source, "composite"));
-  R1_ASSIGN(pass.infer_, ctx.compute_compile(kInfer, "neural_infer"));
+  R1_ASSIGN(pass.pipeline_, ctx.compute_compile(with_det_exp(source, "prm[20 + "), "composite"));
+  R1_ASSIGN(pass.infer_, ctx.compute_compile(with_det_exp(kInfer, "np[11 + "), "neural_infer"));
   return pass;
 }
 
-Result<std::array<std::uint32_t, 12>> CompositePass::upload_neural(const NeuralData& n, std::uint32_t slots) {
+Result<std::array<std::uint32_t, 18>> CompositePass::upload_neural(const NeuralData& n, std::uint32_t slots) {
   if (!infers(n)) return Status::input("vulkan composite: the neural field's architecture is not inferred on the device");
   const std::size_t table = std::size_t{1} << n.log2_table, ni = n.inputs(), h = n.hidden;
   const std::size_t w1 = std::size_t{n.levels} * table * 2, b1 = w1 + h * ni, w2 = b1 + h, b2 = w2 + h * h, w3 = b2 + h,
                     b3 = w3 + 7 * h;
-  if (n.params.size() != b3 + 7) return Status::input("vulkan composite: the neural field's parameters do not match its architecture");
-  const double np[11] = {n.lo.x,       n.lo.y,   n.lo.z,   n.size,       n.centroid.x,
-                         n.centroid.y, n.centroid.z, n.tau_lo, n.tau_hi, n.log2_range,
-                         static_cast<double>(n.fade_power)};
+  const std::size_t d = n.block, wc = b3 + 7, bc = wc + d * 10 * d, wg = bc + d, bg = wg + d * 2 * d, gamma = bg + d;
+  if (n.params.size() != gamma + d) return Status::input("vulkan composite: the neural field's parameters do not match its architecture");
+  std::vector<double> np = {n.lo.x,       n.lo.y,       n.lo.z,   n.size,   n.centroid.x, n.centroid.y,
+                            n.centroid.z, n.tau_lo,     n.tau_hi, n.log2_range, static_cast<double>(n.fade_power),
+                            exp_.log2e,   exp_.ln2_hi,  exp_.ln2_lo};
+  np.insert(np.end(), exp_.taylor.begin(), exp_.taylor.end());
   const auto put = [&](std::size_t which, auto span) -> Status {
     R1_TRY(ctx_->buffer_ensure(buffers_[which], std::max<std::size_t>(span.size_bytes(), 16), Residence::kUpload));
     return ctx_->buffer_write(buffers_[which], detail::bytes_of(span), 0);
   };
   R1_TRY(put(11, std::span<const float>(n.params)));
-  R1_TRY(put(12, std::span<const double>(np, 11)));
+  R1_TRY(put(12, std::span<const double>(np)));
   R1_TRY(put(13, std::span<const std::uint32_t>(n.resolution)));
   const auto u32 = [](std::size_t v) { return static_cast<std::uint32_t>(v); };
-  return std::array<std::uint32_t, 12>{0, slots, n.levels, u32(table), n.hidden, u32(ni), u32(w1), u32(b1), u32(w2), u32(b2), u32(w3), u32(b3)};
+  return std::array<std::uint32_t, 18>{0,       slots,   n.levels, u32(table), n.hidden, u32(ni),  u32(w1), u32(b1), u32(w2),
+                                       u32(b2), u32(w3), u32(b3),  n.block,    u32(wc),  u32(bc),  u32(wg), u32(bg), u32(gamma)};
 }
 
 Result<std::vector<float>> CompositePass::infer(const NeuralData& n, std::span<const double> queries) {
@@ -635,7 +703,7 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   R1_TRY(ensure_write(3, std::span<const double>(splats.splats.empty() ? one : splats.splats)));
   // The neural field (R1-BKD-076): its parameters, query constants and resolutions.
   const NeuralData* nd = field.enabled ? field.neural : nullptr;
-  std::array<std::uint32_t, 12> infer_push{};
+  std::array<std::uint32_t, 18> infer_push{};
   if (nd != nullptr) {
     R1_ASSIGN(infer_push, upload_neural(*nd, std::max<std::uint32_t>(field.samples, 1)));
     prm[37] = nd->kappa;

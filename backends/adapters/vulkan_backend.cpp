@@ -183,7 +183,7 @@ Status cull_on_device(vk::CullPass& pass, const render::Scene& s, const render::
 
 vk::NeuralData neural_data(const render::NeuralField& f) {
   vk::NeuralData n;
-  n.levels = f.config.levels, n.log2_table = f.config.log2_table, n.hidden = f.config.hidden;
+  n.levels = f.config.levels, n.log2_table = f.config.log2_table, n.hidden = f.config.hidden, n.block = f.config.block;
   n.resolution = f.resolution;
   n.lo = f.lo, n.centroid = f.centroid;
   n.size = f.size, n.tau_lo = f.tau_lo, n.tau_hi = f.tau_hi, n.kappa = f.kappa;
@@ -194,8 +194,7 @@ vk::NeuralData neural_data(const render::NeuralField& f) {
   }
   n.fade_power = f.fade_power;
   n.log2_range = f.tau_hi > f.tau_lo ? std::log2(f.tau_hi / f.tau_lo) : 0.0;
-  n.params.reserve(f.grid.size() + f.w1.size() + f.b1.size() + f.w2.size() + f.b2.size() + f.w3.size() + f.b3.size());
-  for (const std::vector<float>* part : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
+  for (const std::vector<float>* part : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3, &f.wc, &f.bc, &f.wg, &f.bg, &f.gamma})
     n.params.insert(n.params.end(), part->begin(), part->end());
   return n;
 }

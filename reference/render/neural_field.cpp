@@ -17,6 +17,7 @@
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
 #include "r1/format/bytes.hpp"
+#include "r1/reference/clifford.hpp"
 
 namespace r1::render {
 
@@ -30,6 +31,7 @@ constexpr double kPointMass = 1.0;  // sigma_hi / the scene's extent about its c
 constexpr double kPriorExpLimit = 500.0;
 constexpr double kCellsPerSigma = 0.5;  // finest level: a cell per two sigma_min (R1-NRF-002)
 constexpr std::uint32_t kPriorCells = 4;  // the prior's grid: cells per side of the particles' box (R1-NRF-007)
+constexpr std::uint64_t kDataSeed = 0x6e72662d64617461u;  // "nrf-data": the training set's draws (R1-NRF-010)
 constexpr double kLrFinal = 0.1;  // the Adam steps decay geometrically to this fraction of the first (R1-NRF-011)
 
 // The entry of grid corner (x, y, z) at a level of `res` cells per side (R1-NRF-002): dense when
@@ -121,15 +123,74 @@ void gather(const NeuralField& f, const Location& e, double t, float* features) 
 using Mat = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using Row = Eigen::Matrix<float, 1, Eigen::Dynamic>;
 
-// The network on the rows of X (one point a row), keeping the activations the backward pass
-// needs: H1, H2 after their ReLU, O the raw outputs. Training and rendering both run it.
-void forward(const NeuralField& f, const Mat& X, Mat& H1, Mat& H2, Mat& O) {
+// The Clifford render block's nonlinearities (R1-NRF-003): r1's SiLU and sigmoid (R1-RND-101, on
+// det_exp) in double, rounded to float, so a device that repeats det_exp gets the same bits.
+float silu_f(float x) { return static_cast<float>(clifford::silu(static_cast<double>(x))); }
+float sigmoid_f(float x) { return static_cast<float>(clifford::sigmoid(static_cast<double>(x))); }
+
+// The block's features of one row (R1-NRF-003; clifford::shifted_inner and shifted_wedge): for
+// the k-th shift s of kNeuralShifts, Inner_s at [2 k d, 2 k d + d) and Wedge_s at [2 k d + d,
+// 2 k d + 2 d), with j = (ch + s) mod d: Inner_s(ch) = SiLU(h[ch] c[j]) and
+// Wedge_s(ch) = h[ch] c[j] - h[j] c[ch], each product rounded to float. `sig`, when given, gets
+// sigmoid(h[ch] c[j]) at [k d + ch] (what training's backward pass needs).
+void clifford_features(const float* h, const float* c, std::uint32_t d, float* F, float* sig = nullptr) {
+  for (std::size_t k = 0; k < kNeuralShifts.size(); ++k) {
+    const auto s = static_cast<std::uint32_t>(kNeuralShifts[k]) % d;
+    float* inner = F + 2 * k * d;
+    float* wedge = inner + d;
+    for (std::uint32_t ch = 0; ch < d; ++ch) {
+      const std::uint32_t j = ch + s < d ? ch + s : ch + s - d;
+      const float p = h[ch] * c[j];
+      const float q = h[j] * c[ch];
+      const double e = clifford::det_exp(-static_cast<double>(p));
+      inner[ch] = static_cast<float>(static_cast<double>(p) / (1.0 + e));
+      if (sig != nullptr) sig[k * d + ch] = static_cast<float>(1.0 / (1.0 + e));
+      wedge[ch] = p - q;
+    }
+  }
+}
+
+// The block's output from H, G and the gate's pre-activation a (R1-NRF-003; clifford::block_residual):
+// B(ch) = h(ch) + gamma(ch) (SiLU(h(ch)) + sigmoid(a(ch)) g(ch)), in float.
+float clifford_out(float h, float g, float a, float gamma) { return h + gamma * (silu_f(h) + sigmoid_f(a) * g); }
+
+// The activations of the network on the rows of X (one point a row), those the backward pass
+// needs: Z1 after the first ReLU (H and C without a block), with a block its features F, the
+// sigmoids of its inner products SP, G, the gate's pre-activation A, and X2 = [B | C] the second
+// layer's input; H2 after the second ReLU, O the raw outputs.
+struct Activations {
+  Mat Z1, F, SP, G, A, X2, H2, O;
+};
+
+void forward(const NeuralField& f, const Mat& X, Activations& a) {
   const auto ni = static_cast<Eigen::Index>(f.inputs()), nh = static_cast<Eigen::Index>(f.config.hidden);
   const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
   const Eigen::Map<const Row> B1(f.b1.data(), nh), B2(f.b2.data(), nh), B3(f.b3.data(), kNeuralOutputs);
-  H1 = ((X * W1.transpose()).rowwise() + B1).cwiseMax(0.0f);
-  H2 = ((H1 * W2.transpose()).rowwise() + B2).cwiseMax(0.0f);
-  O = (H2 * W3.transpose()).rowwise() + B3;
+  a.Z1 = ((X * W1.transpose()).rowwise() + B1).cwiseMax(0.0f);
+  const std::uint32_t d = f.config.block;
+  if (d == 0) {
+    a.H2 = ((a.Z1 * W2.transpose()).rowwise() + B2).cwiseMax(0.0f);
+  } else {
+    const auto D = static_cast<Eigen::Index>(d), nf = static_cast<Eigen::Index>(2 * kNeuralShifts.size() * d);
+    const Eigen::Index rows = X.rows();
+    const Eigen::Map<const Mat> WC(f.wc.data(), D, nf), WG(f.wg.data(), D, 2 * D);
+    const Eigen::Map<const Row> BC(f.bc.data(), D), BG(f.bg.data(), D);
+    a.F.resize(rows, nf);
+    a.SP.resize(rows, static_cast<Eigen::Index>(kNeuralShifts.size()) * D);
+    for (Eigen::Index r = 0; r < rows; ++r) clifford_features(&a.Z1(r, 0), &a.Z1(r, D), d, &a.F(r, 0), &a.SP(r, 0));
+    a.G = (a.F * WC.transpose()).rowwise() + BC;
+    Mat HG(rows, 2 * D);
+    HG << a.Z1.leftCols(D), a.G;
+    a.A = (HG * WG.transpose()).rowwise() + BG;
+    a.X2.resize(rows, nh);
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index ch = 0; ch < D; ++ch) {
+        a.X2(r, ch) = clifford_out(a.Z1(r, ch), a.G(r, ch), a.A(r, ch), f.gamma[static_cast<std::size_t>(ch)]);
+        a.X2(r, D + ch) = a.Z1(r, D + ch);
+      }
+    a.H2 = ((a.X2 * W2.transpose()).rowwise() + B2).cwiseMax(0.0f);
+  }
+  a.O = (a.H2 * W3.transpose()).rowwise() + B3;
 }
 
 }  // namespace
@@ -180,7 +241,8 @@ double gaussian(std::uint64_t seed, std::uint64_t item, std::uint64_t dim) {
 
 // The architecture a field may have (training refuses others, reading rejects them).
 bool architecture_in_range(const NeuralConfig& c) {
-  return c.levels >= 1 && c.levels <= 32 && c.log2_table >= 4 && c.log2_table <= 24 && c.hidden >= 1 && c.hidden <= 1024;
+  return c.levels >= 1 && c.levels <= 32 && c.log2_table >= 4 && c.log2_table <= 24 && c.hidden >= 1 && c.hidden <= 1024 &&
+         (c.block == 0 || (c.block >= 2 && c.hidden == 2 * c.block));
 }
 
 template <class Body>
@@ -254,7 +316,37 @@ std::vector<float> input_major(const std::vector<float>& w, std::uint32_t no, st
   return t;
 }
 
+// The Clifford render block on one row (R1-NRF-003): H and C the halves of h1, G = Wc F + bc, the
+// gate's pre-activation Wg [H | G] + bg, and the second layer's input x2 = [B | C]; wct and wgt
+// are wc and wg input-major.
+void block_row(const NeuralField& f, const float* h1, const float* wct, const float* wgt, float* x2) {
+  const std::uint32_t d = f.config.block, nf = static_cast<std::uint32_t>(2 * kNeuralShifts.size()) * d;
+  thread_local std::vector<float> F, hg, a;
+  F.resize(nf);
+  hg.resize(2 * d);
+  a.resize(d);
+  clifford_features(h1, h1 + d, d, F.data());
+  infer_layer(F.data(), nf, wct, f.bc.data(), d, true, hg.data() + d);
+  std::copy(h1, h1 + d, hg.begin());
+  infer_layer(hg.data(), 2 * d, wgt, f.bg.data(), d, true, a.data());
+  for (std::uint32_t ch = 0; ch < d; ++ch) {
+    x2[ch] = clifford_out(h1[ch], hg[d + ch], a[ch], f.gamma[ch]);
+    x2[d + ch] = h1[d + ch];
+  }
+}
+
 }  // namespace
+
+void detail::neural_block(const NeuralField& f, const float* h1, float* x2) {
+  const std::uint32_t d = f.config.block;
+  if (d == 0) {
+    std::copy(h1, h1 + f.config.hidden, x2);
+    return;
+  }
+  const std::vector<float> wct = input_major(f.wc, d, static_cast<std::uint32_t>(2 * kNeuralShifts.size()) * d),
+                           wgt = input_major(f.wg, d, 2 * d);
+  block_row(f, h1, wct.data(), wgt.data(), x2);
+}
 
 // The order of operations a device repeats (R1-NRF-007, 008): one pass over the parts, one exp
 // each.
@@ -313,12 +405,15 @@ NeuralInference::NeuralInference(const NeuralField& f)
     : f_(f),
       w1t_(input_major(f.w1, f.config.hidden, f.inputs())),
       w2t_(input_major(f.w2, f.config.hidden, f.config.hidden)),
-      w3t_(input_major(f.w3, kNeuralOutputs, f.config.hidden)) {}
+      w3t_(input_major(f.w3, kNeuralOutputs, f.config.hidden)),
+      wct_(input_major(f.wc, f.config.block, static_cast<std::uint32_t>(2 * kNeuralShifts.size()) * f.config.block)),
+      wgt_(input_major(f.wg, f.config.block, 2 * f.config.block)) {}
 
 FieldValue NeuralInference::evaluate(const Vec3& x, double sigma) const {
   const NeuralField& f = f_;
+  const std::uint32_t d = f.config.block;
   thread_local std::vector<std::uint32_t> index;
-  thread_local std::vector<float> weight, mask, features, h1, h2;
+  thread_local std::vector<float> weight, mask, features, h1, h2, x2;
   index.resize(f.config.levels * 8);
   weight.resize(f.config.levels * 8);
   mask.resize(f.config.levels);
@@ -331,7 +426,13 @@ FieldValue NeuralInference::evaluate(const Vec3& x, double sigma) const {
   gather(f, e, q.t, features.data());
   float o[kNeuralOutputs];
   infer_layer(features.data(), f.inputs(), w1t_.data(), f.b1.data(), f.config.hidden, false, h1.data());
-  infer_layer(h1.data(), f.config.hidden, w2t_.data(), f.b2.data(), f.config.hidden, false, h2.data());
+  const float* in2 = h1.data();
+  if (d > 0) {
+    x2.resize(f.config.hidden);
+    block_row(f, h1.data(), wct_.data(), wgt_.data(), x2.data());
+    in2 = x2.data();
+  }
+  infer_layer(in2, f.config.hidden, w2t_.data(), f.b2.data(), f.config.hidden, false, h2.data());
   infer_layer(h2.data(), f.config.hidden, w3t_.data(), f.b3.data(), kNeuralOutputs, true, o);
   return decode_neural_outputs(f, o, x, sigma);
 }
@@ -466,6 +567,18 @@ NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed
   layer(f.w1, f.b1, nh, ni, 1);
   layer(f.w2, f.b2, nh, nh, 2);
   layer(f.w3, f.b3, kNeuralOutputs, nh, 3);
+  if (c.block > 0) {
+    // The Clifford block as R1-RND-105 initialises one (bounds 1 / sqrt(fan in), gamma 1e-5: a
+    // near-identity residual at the start), from this field's seed.
+    const std::uint32_t d = c.block, nf = static_cast<std::uint32_t>(2 * kNeuralShifts.size()) * d;
+    f.wc.resize(std::size_t{d} * nf);
+    f.wg.resize(std::size_t{d} * 2 * d);
+    for (std::size_t k = 0; k < f.wc.size(); ++k) f.wc[k] = init_uniform(seed, k, 4, 1.0 / std::sqrt(static_cast<double>(nf)));
+    for (std::size_t k = 0; k < f.wg.size(); ++k) f.wg[k] = init_uniform(seed, k, 5, 1.0 / std::sqrt(2.0 * d));
+    f.bc.assign(d, 0.0f);
+    f.bg.assign(d, 0.0f);
+    f.gamma.assign(d, static_cast<float>(clifford::kInitialGamma));
+  }
   return f;
 }
 
@@ -527,6 +640,160 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
   return set;
 }
 
+// The training set's target means and the heads' loss weights (R1-NRF-011), in set order: each
+// head's squared error is divided by its targets' variance over the set, so the colour (a few
+// hundredths) weighs as much as the density (a few units) in the loss.
+struct SetMoments {
+  double mean[kNeuralOutputs] = {};
+  double head_weight[kNeuralOutputs] = {};
+};
+SetMoments moments(const std::vector<Sample>& set) {
+  SetMoments mo;
+  double* mean = mo.mean;
+  double cw = 0;
+  for (const Sample& smp : set) {
+    mean[0] += static_cast<double>(smp.target[0]);
+    for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] += static_cast<double>(smp.weight_cf) * static_cast<double>(smp.target[k]);
+    cw += static_cast<double>(smp.weight_cf);
+  }
+  mean[0] /= static_cast<double>(set.size());
+  for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] = cw > 0 ? mean[k] / cw : 0.0;
+  double var[kNeuralOutputs] = {};
+  for (const Sample& smp : set) {
+    const double d0 = static_cast<double>(smp.target[0]) - mean[0];
+    var[0] += d0 * d0;
+    for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) {
+      const double d = static_cast<double>(smp.target[k]) - mean[k];
+      var[k] += static_cast<double>(smp.weight_cf) * d * d;
+    }
+  }
+  var[0] /= static_cast<double>(set.size());
+  for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) var[k] = cw > 0 ? var[k] / cw : 0.0;
+  for (std::uint32_t k = 0; k < kNeuralOutputs; ++k) mo.head_weight[k] = 1.0 / std::max(var[k], 1e-6);
+  return mo;
+}
+
+// The parameters Adam trains besides the grid, in gradient order: w1, b1, w2, b2, w3, b3, then the
+// block's wc, bc, wg, bg, gamma (empty without one).
+std::array<std::vector<float>*, 11> mlp_parts(NeuralField& f) {
+  return {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3, &f.wc, &f.bc, &f.wg, &f.bg, &f.gamma};
+}
+
+// One chunk's loss (R1-NRF-011, the points' terms summed in row order) and its gradients (the
+// terms times `scale`): the parameters' into `gmlp` (in mlp_parts order; skipped when null) and the input
+// rows' into dX (what the grid's entries get). The rows of X are the points' network inputs.
+double backward(const NeuralField& f, const Mat& X, const Sample* const* points, const double* head_weight, double scale,
+                float* gmlp, Mat& dX) {
+  const auto ni = static_cast<Eigen::Index>(f.inputs()), nh = static_cast<Eigen::Index>(f.config.hidden);
+  const Eigen::Index rows = X.rows();
+  Activations a;
+  forward(f, X, a);
+  // Loss and its gradient at the outputs.
+  Mat dO(rows, kNeuralOutputs);
+  double total = 0;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const Sample& smp = *points[r];
+    // The density head in log1p units of the kernel sum w = exp(o0) times the prior (1 for a
+    // field without one, where log1p(w) is softplus(o0)); d log1p(w) / d o0 = w / (1 + w).
+    const double wh = std::exp(static_cast<double>(a.O(r, 0))) * smp.prior;
+    const double r0 = std::log1p(wh) - static_cast<double>(smp.target[0]);
+    double loss = head_weight[0] * r0 * r0;
+    dO(r, 0) = static_cast<float>(2 * head_weight[0] * r0 * (wh / (1 + wh)) * scale);
+    for (int k = 1; k <= 3; ++k) {
+      const double sg = sigmoid(static_cast<double>(a.O(r, k)) + smp.colour_logit[k - 1]);
+      const double d = sg - static_cast<double>(smp.target[k]);
+      const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
+      loss += wk * d * d;
+      dO(r, k) = static_cast<float>(2 * wk * d * sg * (1 - sg) * scale);
+    }
+    for (int k = 4; k <= 6; ++k) {
+      const double d = static_cast<double>(a.O(r, k)) - static_cast<double>(smp.target[k]);
+      const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
+      loss += wk * d * d;
+      dO(r, k) = static_cast<float>(2 * wk * d * scale);
+    }
+    total += loss;
+  }
+  // Backward: layer gradients as matrix products, ReLU masks from the activations.
+  const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
+  const std::uint32_t d = f.config.block;
+  const auto D = static_cast<Eigen::Index>(d), nf = static_cast<Eigen::Index>(2 * kNeuralShifts.size() * d);
+  std::array<float*, 11> g{};
+  if (gmlp != nullptr) {
+    float* at = gmlp;
+    const std::size_t sizes[11] = {f.w1.size(), f.b1.size(), f.w2.size(), f.b2.size(), f.w3.size(), f.b3.size(),
+                                   f.wc.size(), f.bc.size(), f.wg.size(), f.bg.size(), f.gamma.size()};
+    for (int k = 0; k < 11; ++k) {
+      g[static_cast<std::size_t>(k)] = at;
+      at += sizes[k];
+    }
+  }
+  const Mat& in2 = d == 0 ? a.Z1 : a.X2;
+  const Mat dH2 = ((dO * W3).array() * (a.H2.array() > 0.0f).cast<float>()).matrix();
+  if (gmlp != nullptr) {
+    Eigen::Map<Mat>(g[4], kNeuralOutputs, nh).noalias() = dO.transpose() * a.H2;
+    Eigen::Map<Row>(g[5], kNeuralOutputs) = dO.colwise().sum();
+    Eigen::Map<Mat>(g[2], nh, nh).noalias() = dH2.transpose() * in2;
+    Eigen::Map<Row>(g[3], nh) = dH2.colwise().sum();
+  }
+  Mat dZ1 = dH2 * W2;  // the second layer's input's gradient, made the first layer's below
+  if (d > 0) {
+    // The Clifford block (R1-NRF-003) backwards: B = H + gamma (SiLU(H) + sigmoid(A) G),
+    // A = Wg [H | G] + bg, G = Wc F + bc, F the shifted inner and wedge products of H and C.
+    const Eigen::Map<const Mat> WC(f.wc.data(), D, nf), WG(f.wg.data(), D, 2 * D);
+    Mat dG(rows, D), dA(rows, D);
+    Row dgamma = Row::Zero(D);
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index ch = 0; ch < D; ++ch) {
+        const float h = a.Z1(r, ch), gv = a.G(r, ch), gm = f.gamma[static_cast<std::size_t>(ch)], db = dZ1(r, ch);
+        const float sh = sigmoid_f(h), sa = sigmoid_f(a.A(r, ch));
+        dgamma(ch) += db * (silu_f(h) + sa * gv);
+        const float dbg = db * gm;
+        dZ1(r, ch) = db + dbg * (sh * (1.0f + h * (1.0f - sh)));  // SiLU'(h) = s (1 + h (1 - s))
+        dG(r, ch) = dbg * sa;
+        dA(r, ch) = dbg * gv * (sa * (1.0f - sa));
+      }
+    Mat HG(rows, 2 * D);
+    HG << a.Z1.leftCols(D), a.G;
+    const Mat dHG = dA * WG;
+    dZ1.leftCols(D) += dHG.leftCols(D);
+    dG += dHG.rightCols(D);
+    const Mat dF = dG * WC;
+    if (gmlp != nullptr) {
+      Eigen::Map<Mat>(g[6], D, nf).noalias() = dG.transpose() * a.F;
+      Eigen::Map<Row>(g[7], D) = dG.colwise().sum();
+      Eigen::Map<Mat>(g[8], D, 2 * D).noalias() = dA.transpose() * HG;
+      Eigen::Map<Row>(g[9], D) = dA.colwise().sum();
+      Eigen::Map<Row>(g[10], D) = dgamma;
+    }
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const float* h = &a.Z1(r, 0);
+      const float* cv = h + D;
+      for (std::size_t k = 0; k < kNeuralShifts.size(); ++k) {
+        const auto s = static_cast<Eigen::Index>(static_cast<std::uint32_t>(kNeuralShifts[k]) % d);
+        for (Eigen::Index ch = 0; ch < D; ++ch) {
+          const Eigen::Index j = ch + s < D ? ch + s : ch + s - D;
+          const float p = h[ch] * cv[j], sp = a.SP(r, static_cast<Eigen::Index>(k) * D + ch);
+          const float di = dF(r, static_cast<Eigen::Index>(2 * k) * D + ch) * (sp * (1.0f + p * (1.0f - sp)));
+          const float dw = dF(r, static_cast<Eigen::Index>(2 * k + 1) * D + ch);
+          // Inner: SiLU(h[ch] c[j]); wedge: h[ch] c[j] - h[j] c[ch].
+          dZ1(r, ch) += (di + dw) * cv[j];
+          dZ1(r, D + j) += (di + dw) * h[ch];
+          dZ1(r, j) -= dw * cv[ch];
+          dZ1(r, D + ch) -= dw * h[j];
+        }
+      }
+    }
+  }
+  dZ1 = (dZ1.array() * (a.Z1.array() > 0.0f).cast<float>()).matrix();
+  if (gmlp != nullptr) {
+    Eigen::Map<Mat>(g[0], nh, ni).noalias() = dZ1.transpose() * X;
+    Eigen::Map<Row>(g[1], nh) = dZ1.colwise().sum();
+  }
+  dX = dZ1 * W1;
+  return total;
+}
+
 // Adam on the set (R1-NRF-011): the MLP too when `mlp` (a local update keeps it, R1-NRF-050),
 // its output biases first set to the set's means when `init_biases`.
 void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, std::uint32_t steps, bool mlp, bool init_biases,
@@ -534,44 +801,21 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
   NeuralConfig c = f.config;
   c.batch = batch;
   c.steps = steps;
-  const std::uint32_t table = 1u << c.log2_table, ni = f.inputs(), nh = c.hidden;
+  const std::uint32_t table = 1u << c.log2_table, ni = f.inputs();
   const auto samples = static_cast<std::uint32_t>(set.size());
-  double head_weight[kNeuralOutputs] = {1, 1, 1, 1, 1, 1, 1};
-  // The output biases start at the training set's means (R1-NRF-020), in set order: the heads
-  // then learn the variation from the first step instead of spending steps on the offset.
-  {
-    double mean[kNeuralOutputs] = {};
-    double cw = 0;
-    for (const Sample& smp : set) {
-      mean[0] += static_cast<double>(smp.target[0]);
-      for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] += static_cast<double>(smp.weight_cf) * static_cast<double>(smp.target[k]);
-      cw += static_cast<double>(smp.weight_cf);
+  const SetMoments mo = moments(set);
+  const double* head_weight = mo.head_weight;
+  // The output biases start at the training set's means (R1-NRF-020): the heads then learn the
+  // variation from the first step instead of spending steps on the offset.
+  if (init_biases) {
+    // With the prior the density head starts at the prior itself (o0 = 0).
+    f.b3[0] = !f.prior_parts.empty() ? 0.0f
+                                     : static_cast<float>(mo.mean[0] > 1e-6 ? std::log(std::expm1(mo.mean[0])) : std::log(1e-6));
+    for (std::uint32_t k = 1; k <= 3; ++k) {
+      const double m = std::clamp(mo.mean[k], 1e-3, 1 - 1e-3);
+      f.b3[k] = !f.prior_parts.empty() ? 0.0f : static_cast<float>(std::log(m / (1 - m)));
     }
-    mean[0] /= static_cast<double>(set.size());
-    for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) mean[k] = cw > 0 ? mean[k] / cw : 0.0;
-    if (init_biases) {
-      // With the prior the density head starts at the prior itself (o0 = 0).
-      f.b3[0] = !f.prior_parts.empty() ? 0.0f : static_cast<float>(mean[0] > 1e-6 ? std::log(std::expm1(mean[0])) : std::log(1e-6));
-      for (std::uint32_t k = 1; k <= 3; ++k) {
-        const double m = std::clamp(mean[k], 1e-3, 1 - 1e-3);
-        f.b3[k] = !f.prior_parts.empty() ? 0.0f : static_cast<float>(std::log(m / (1 - m)));
-      }
-      for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mean[k]);
-    }
-    // Each head's squared error is divided by its targets' variance over the set (R1-NRF-011), so
-    // the colour (a few hundredths) weighs as much as the density (a few units) in the loss.
-    double var[kNeuralOutputs] = {};
-    for (const Sample& smp : set) {
-      const double d0 = static_cast<double>(smp.target[0]) - mean[0];
-      var[0] += d0 * d0;
-      for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) {
-        const double d = static_cast<double>(smp.target[k]) - mean[k];
-        var[k] += static_cast<double>(smp.weight_cf) * d * d;
-      }
-    }
-    var[0] /= static_cast<double>(set.size());
-    for (std::uint32_t k = 1; k < kNeuralOutputs; ++k) var[k] = cw > 0 ? var[k] / cw : 0.0;
-    for (std::uint32_t k = 0; k < kNeuralOutputs; ++k) head_weight[k] = 1.0 / std::max(var[k], 1e-6);
+    for (std::uint32_t k = 4; k < kNeuralOutputs; ++k) f.b3[k] = static_cast<float>(mo.mean[k]);
   }
 
   // Where every sample falls in the grid, once: it depends on the sample only.
@@ -588,8 +832,8 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
   // Training (R1-NRF-011): batches in set order; per chunk of kChunk points one pass of matrix
   // products forward and back, gradients reduced in chunk order; Adam on the MLP and on the grid
   // entries a batch touched.
-  const std::size_t nw1 = f.w1.size(), nw2 = f.w2.size(), nw3 = f.w3.size();
-  const std::size_t n_mlp = nw1 + nh + nw2 + nh + nw3 + kNeuralOutputs;
+  std::size_t n_mlp = 0;
+  for (const std::vector<float>* v : mlp_parts(f)) n_mlp += v->size();
   Adam adam_mlp, adam_grid;
   adam_mlp.resize(n_mlp);
   adam_grid.resize(f.grid.size());
@@ -613,67 +857,26 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
     g.mlp.resize(n_mlp);
     g.grid.resize(static_cast<std::size_t>(c.levels) * kChunk * 8);
   }
-  // The MLP's parameters in gradient order (w1, b1, w2, b2, w3, b3, as ChunkGrad::mlp holds them).
+  // The MLP's parameters in gradient order (mlp_parts, as ChunkGrad::mlp holds them).
   std::vector<float*> params;
   params.reserve(n_mlp);
-  for (std::vector<float>* v : {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3})
+  for (std::vector<float>* v : mlp_parts(f))
     for (float& p : *v) params.push_back(&p);
   for (std::uint32_t step = 1; step <= c.steps; ++step) {
     const std::uint64_t first = static_cast<std::uint64_t>(step - 1) * c.batch;
-    const Eigen::Map<const Mat> W1(f.w1.data(), nh, ni), W2(f.w2.data(), nh, nh), W3(f.w3.data(), kNeuralOutputs, nh);
     parallel_chunks(chunks, [&](std::uint32_t chunk) {
       ChunkGrad& g = cg[chunk];
       g.loss = 0;
       const std::uint32_t begin = chunk * kChunk, end = std::min(c.batch, (chunk + 1) * kChunk);
       const Eigen::Index rows = end - begin;
-      Mat X(rows, ni), H1, H2, O, dO(rows, kNeuralOutputs);
+      Mat X(rows, ni), dX;
+      const Sample* points[kChunk];
       for (Eigen::Index r = 0; r < rows; ++r) {
         const std::size_t k = (first + begin + static_cast<std::uint64_t>(r)) % samples;
         gather(f, location(k), set[k].q.t, X.row(r).data());
+        points[r] = &set[k];
       }
-      forward(f, X, H1, H2, O);
-      // Loss and its gradient at the outputs (means over the batch).
-      const double scale = 1.0 / c.batch;
-      for (Eigen::Index r = 0; r < rows; ++r) {
-        const Sample& smp = set[(first + begin + static_cast<std::uint64_t>(r)) % samples];
-        // The density head in log1p units of the kernel sum w = exp(o0) times the prior (1 for a
-        // field without one, where log1p(w) is softplus(o0)); d log1p(w) / d o0 = w / (1 + w).
-        const double wh = std::exp(static_cast<double>(O(r, 0))) * smp.prior;
-        const double r0 = std::log1p(wh) - static_cast<double>(smp.target[0]);
-        double loss = head_weight[0] * r0 * r0;
-        dO(r, 0) = static_cast<float>(2 * head_weight[0] * r0 * (wh / (1 + wh)) * scale);
-        for (int k = 1; k <= 3; ++k) {
-          const double sg = sigmoid(static_cast<double>(O(r, k)) + smp.colour_logit[k - 1]);
-          const double d = sg - static_cast<double>(smp.target[k]);
-          const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
-          loss += wk * d * d;
-          dO(r, k) = static_cast<float>(2 * wk * d * sg * (1 - sg) * scale);
-        }
-        for (int k = 4; k <= 6; ++k) {
-          const double d = static_cast<double>(O(r, k)) - static_cast<double>(smp.target[k]);
-          const double wk = head_weight[k] * static_cast<double>(smp.weight_cf);
-          loss += wk * d * d;
-          dO(r, k) = static_cast<float>(2 * wk * d * scale);
-        }
-        g.loss += loss;
-      }
-      // Backward: layer gradients as matrix products, ReLU masks from the activations.
-      Eigen::Map<Mat> gW1(g.mlp.data(), nh, ni), gW2(g.mlp.data() + nw1 + nh, nh, nh),
-          gW3(g.mlp.data() + nw1 + nh + nw2 + nh, kNeuralOutputs, nh);
-      Eigen::Map<Row> gB1(g.mlp.data() + nw1, nh), gB2(g.mlp.data() + nw1 + nh + nw2, nh),
-          gB3(g.mlp.data() + nw1 + nh + nw2 + nh + nw3, kNeuralOutputs);
-      // The weights' gradients only when the MLP is trained; the grid's need dX alone.
-      const Mat dH2 = ((dO * W3).array() * (H2.array() > 0.0f).cast<float>()).matrix();
-      const Mat dH1 = ((dH2 * W2).array() * (H1.array() > 0.0f).cast<float>()).matrix();
-      if (mlp) {
-        gW3.noalias() = dO.transpose() * H2;
-        gB3 = dO.colwise().sum();
-        gW2.noalias() = dH2.transpose() * H1;
-        gB2 = dH2.colwise().sum();
-        gW1.noalias() = dH1.transpose() * X;
-        gB1 = dH1.colwise().sum();
-      }
-      const Mat dX = dH1 * W1;
+      g.loss = backward(f, X, points, head_weight, 1.0 / c.batch, mlp ? g.mlp.data() : nullptr, dX);
       for (Eigen::Index r = 0; r < rows; ++r) {
         const Location e = location((first + begin + static_cast<std::uint64_t>(r)) % samples);
         for (std::uint32_t l = 0; l < c.levels; ++l)
@@ -736,6 +939,37 @@ void fit(NeuralField& f, const std::vector<Sample>& set, std::uint32_t batch, st
 
 }  // namespace
 
+detail::LossGradient detail::neural_loss_gradient(const Scene& s, const NeuralField& f, std::uint32_t points, std::uint64_t seed) {
+  std::vector<std::uint32_t> every(s.n);
+  for (std::uint32_t p = 0; p < s.n; ++p) every[p] = p;
+  const std::vector<Sample> set = make_set(s, f, points, seed ^ kDataSeed, every, nullptr, {});
+  const SetMoments mo = moments(set);
+  NeuralField copy = f;
+  std::size_t n_mlp = 0;
+  for (const std::vector<float>* v : mlp_parts(copy)) n_mlp += v->size();
+  LossGradient out;
+  out.gradient.assign(n_mlp, 0.0f);
+  std::vector<float> chunk(n_mlp);
+  const std::size_t corners = std::size_t{f.config.levels} * 8;
+  std::vector<std::uint32_t> index(corners);
+  std::vector<float> weight(corners), mask(f.config.levels);
+  for (std::uint32_t begin = 0; begin < points; begin += kChunk) {
+    const std::uint32_t rows = std::min(kChunk, points - begin);
+    Mat X(rows, f.inputs()), dX;
+    const Sample* pts[kChunk];
+    for (std::uint32_t r = 0; r < rows; ++r) {
+      const Location e{index.data(), weight.data(), mask.data()};
+      locate(f, set[begin + r].q, e);
+      gather(f, e, set[begin + r].q.t, X.row(r).data());
+      pts[r] = &set[begin + r];
+    }
+    out.loss += backward(f, X, pts, mo.head_weight, 1.0 / points, chunk.data(), dX);
+    for (std::size_t k = 0; k < n_mlp; ++k) out.gradient[k] += chunk[k];
+  }
+  out.loss /= points;
+  return out;
+}
+
 Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed,
                                        const ProgressFn& progress) {
   if (s.n == 0) return Status::input("train-field: the epoch has no particles");
@@ -747,7 +981,7 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   NeuralField f = init_field(s, c, seed);
   std::vector<std::uint32_t> every(s.n);
   for (std::uint32_t p = 0; p < s.n; ++p) every[p] = p;
-  const std::vector<Sample> set = make_set(s, f, c.samples, seed ^ 0x6e72662d64617461u /* "nrf-data" */, every, nullptr, progress);
+  const std::vector<Sample> set = make_set(s, f, c.samples, seed ^ kDataSeed, every, nullptr, progress);
   fit(f, set, c.batch, c.steps, true, true, progress);
   return f;
 }
@@ -802,7 +1036,7 @@ Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev,
     const Vec3& x = s.position[p];
     if (x.x >= b_lo.x && x.x <= b_hi.x && x.y >= b_lo.y && x.y <= b_hi.y && x.z >= b_lo.z && x.z <= b_hi.z) pool.push_back(p);
   }
-  std::vector<Sample> set = make_set(s, f, samples, seed ^ 0x6e72662d64617461u, pool, &box, progress);
+  std::vector<Sample> set = make_set(s, f, samples, seed ^ kDataSeed, pool, &box, progress);
   fit(f, set, std::min(f.config.batch, samples), steps, false, false, progress);
   return f;
 }
@@ -810,7 +1044,8 @@ Result<NeuralField> update_neural_field(const Scene& s, const NeuralField& prev,
 // ---- file (R1-NRF-030) ------------------------------------------------------------------------
 
 namespace {
-constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\4'};
+constexpr char kMagic[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\5'};
+constexpr char kMagicV4[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\4'};
 constexpr char kMagicV3[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\3'};
 constexpr char kMagicV2[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\2'};
 constexpr char kMagicV1[8] = {'r', '1', '-', 'n', 'r', 'f', '\0', '\1'};
@@ -844,7 +1079,8 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
     for (const double v : p.gradient) format::put_f64(out, v);
   }
   format::put_u32(out, f.fade_power);
-  for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3}) put_floats(out, *v);
+  format::put_u32(out, c.block);
+  for (const auto* v : {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3, &f.wc, &f.bc, &f.wg, &f.bg, &f.gamma}) put_floats(out, *v);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
   format::put_bytes(out, d);
   return out;
@@ -853,12 +1089,12 @@ std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8
 Result<NeuralField> decode_neural_field(std::string_view bytes, const std::string& name,
                                         std::span<const std::uint8_t> snapshot) {
   const std::size_t kDigest = sizeof(hemera::Digest);
-  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1 to 4)");
+  if (bytes.size() < sizeof kMagic + kDigest) return Status::input(name + ": not an r1 neural field (r1-nrf version 1 to 5)");
   const std::string_view magic = bytes.substr(0, sizeof kMagic);
   const bool v1 = magic == std::string_view(kMagicV1, sizeof kMagicV1), v2 = magic == std::string_view(kMagicV2, sizeof kMagicV2),
-             v3 = magic == std::string_view(kMagicV3, sizeof kMagicV3);
-  if (!v1 && !v2 && !v3 && magic != std::string_view(kMagic, sizeof kMagic))
-    return Status::input(name + ": not an r1 neural field (r1-nrf version 1 to 4)");
+             v3 = magic == std::string_view(kMagicV3, sizeof kMagicV3), v4 = magic == std::string_view(kMagicV4, sizeof kMagicV4);
+  if (!v1 && !v2 && !v3 && !v4 && magic != std::string_view(kMagic, sizeof kMagic))
+    return Status::input(name + ": not an r1 neural field (r1-nrf version 1 to 5)");
   const std::string_view body = bytes.substr(0, bytes.size() - kDigest);
   const hemera::Digest d = hemera::hash(std::span(reinterpret_cast<const std::uint8_t*>(body.data()), body.size()));
   if (!std::equal(d.begin(), d.end(), reinterpret_cast<const std::uint8_t*>(bytes.data() + body.size())))
@@ -918,13 +1154,20 @@ Result<NeuralField> decode_neural_field(std::string_view bytes, const std::strin
     if (!r.u32(f.fade_power)) return r.error("truncated");
     if (f.fade_power != 2 && f.fade_power != 4) return r.error("bad fade power (2 or 4)");
   }
+  // Version 5: the Clifford block's width (0: none).
+  if (!v1 && !v2 && !v3 && !v4) {
+    if (!r.u32(c.block)) return r.error("truncated");
+    if (!architecture_in_range(c)) return r.error("bad Clifford block width (0, or half the hidden width)");
+  }
   const std::uint32_t ni = f.inputs(), nh = c.hidden;
-  const std::size_t sizes[7] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,
-                                static_cast<std::size_t>(nh) * ni, nh,
-                                static_cast<std::size_t>(nh) * nh, nh,
-                                static_cast<std::size_t>(kNeuralOutputs) * nh, kNeuralOutputs};
-  std::vector<float>* dst[7] = {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3};
-  for (int k = 0; k < 7; ++k) {
+  const std::size_t bw = c.block, nf = 2 * kNeuralShifts.size() * bw;
+  const std::size_t sizes[12] = {static_cast<std::size_t>(c.levels) << c.log2_table << 1,
+                                 static_cast<std::size_t>(nh) * ni, nh,
+                                 static_cast<std::size_t>(nh) * nh, nh,
+                                 static_cast<std::size_t>(kNeuralOutputs) * nh, kNeuralOutputs,
+                                 bw * nf, bw, bw * 2 * bw, bw, bw};
+  std::vector<float>* dst[12] = {&f.grid, &f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3, &f.wc, &f.bc, &f.wg, &f.bg, &f.gamma};
+  for (int k = 0; k < 12; ++k) {
     if (r.left() < sizes[k] * 4) return r.error("truncated");
     dst[k]->resize(sizes[k]);
     for (float& x : *dst[k]) {

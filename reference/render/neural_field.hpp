@@ -24,6 +24,9 @@ struct NeuralConfig {
   std::uint32_t log2_table = 15;    // T = 2^15 entries per level (2 features each)
   std::uint32_t base_resolution = 16;
   std::uint32_t hidden = 64;        // two hidden layers of this width
+  // The Clifford render block's channel width d between the two hidden layers (R1-NRF-003): 0 for
+  // none (R-1.0 7.5's fall-back network), else hidden = 2 d (the first layer's halves are H and C).
+  std::uint32_t block = 0;
   std::uint32_t samples = 1u << 16; // training set: points of the scene cube and tau range
   std::uint32_t batch = 1u << 12;
   std::uint32_t steps = 200;
@@ -34,6 +37,8 @@ struct NeuralConfig {
 
 inline constexpr std::uint32_t kNeuralFeatures = 2;  // per hash-grid entry
 inline constexpr std::uint32_t kNeuralOutputs = 7;   // density, colour (3), flow (3)
+// The Clifford render block's shift set S (R-1.0 7.1 item 3).
+inline constexpr std::array<std::int32_t, 5> kNeuralShifts = {1, 2, 4, 8, 16};
 
 struct NeuralField {
   NeuralConfig config;
@@ -71,6 +76,9 @@ struct NeuralField {
   std::uint32_t fade_power = 4;           // the fine levels' fade exponent: 4 (2 in fields before version 3)
   std::vector<float> grid;                // levels x 2^log2_table x 2
   std::vector<float> w1, b1, w2, b2, w3, b3;  // row-major: w1 is hidden x inputs
+  // The Clifford render block (config.block = d > 0; empty without it), row-major like the layers:
+  // wc is d x (2 |S| d), wg is d x 2 d; gamma the residual scale (R1-NRF-003).
+  std::vector<float> wc, bc, wg, bg, gamma;
   double loss_first = 0, loss_last = 0;   // mean training loss of the first and last step
   // Local updates since the field was trained whole (R1-NRF-050), and the last one's box (zero
   // when none).
@@ -94,7 +102,7 @@ class NeuralInference {
 
  private:
   const NeuralField& f_;
-  std::vector<float> w1t_, w2t_, w3t_;  // w[j][i] at [i * outputs + j]
+  std::vector<float> w1t_, w2t_, w3t_, wct_, wgt_;  // w[j][i] at [i * outputs + j]
 };
 
 // The field's value from the network's 7 raw outputs at (x, sigma) (R1-NRF-004, 007, 008): what
@@ -130,6 +138,21 @@ SceneChange scene_change(std::span<const hemera::Digest> prev_ids, const Scene& 
 
 // The analytic far field the field is trained on: every node at its scene aggregate.
 FieldFrame far_field_frame(const Scene& s, const FieldParams& p = {});
+
+namespace detail {
+// The second layer's input from the first layer's output `h1` (config.hidden floats) into `x2`
+// (as many): h1 itself without a block, [B | C] with one (R1-NRF-003). What NeuralInference runs.
+void neural_block(const NeuralField& f, const float* h1, float* x2);
+// The training loss of f on the first `points` points of the training set training would draw
+// for scene s with `seed` (R1-NRF-010, 011; the batch mean of the points' terms) and its gradient
+// with respect to the network's parameters in the order w1, b1, w2, b2, w3, b3, wc, bc, wg, bg,
+// gamma, as a training step computes them: for checking the backward pass.
+struct LossGradient {
+  double loss = 0;
+  std::vector<float> gradient;
+};
+LossGradient neural_loss_gradient(const Scene& s, const NeuralField& f, std::uint32_t points, std::uint64_t seed);
+}  // namespace detail
 
 // File bytes (R1-NRF-030) and back; `snapshot` is the digest of the snapshot the epoch was made from (R1-NRF-030).
 std::string encode_neural_field(const NeuralField& f, std::span<const std::uint8_t> snapshot);

@@ -13,6 +13,7 @@
 
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/reference/clifford.hpp"
 #include "image.hpp"
 #include "image_diff.hpp"
 #include "renderer.hpp"
@@ -37,8 +38,15 @@ r1::Epoch blob_epoch(std::uint32_t n) {
   return test::epoch_from("neural-test", ps);
 }
 
-NeuralConfig small_config() {
+// The network with and without the Clifford render block (R1-NRF-003): the tests that hold for both
+// run on both.
+class NeuralNetworks : public ::testing::TestWithParam<std::uint32_t> {};
+INSTANTIATE_TEST_SUITE_P(Block, NeuralNetworks, ::testing::Values(0u, 32u),
+                         [](const ::testing::TestParamInfo<std::uint32_t>& i) { return i.param == 0 ? "None" : "Clifford"; });
+
+NeuralConfig small_config(std::uint32_t block = 0) {
   NeuralConfig c;
+  c.block = block;
   c.log2_table = 12;
   c.samples = 1u << 13;
   c.batch = 1u << 11;
@@ -55,10 +63,10 @@ r1::Result<NeuralField> train_small(const Scene& s, std::uint32_t steps, std::ui
 
 std::span<const std::uint8_t> digest_of(const r1::Epoch& e) { return e.snapshot_digest; }
 
-TEST(NeuralField, TrainingIsTheSameBytesOnOneThreadAndOnAll) {
+TEST_P(NeuralNetworks, TrainingIsTheSameBytesOnOneThreadAndOnAll) {
   const r1::Epoch e = blob_epoch(400);
   const Scene s = make_scene(e);
-  NeuralConfig one = small_config(), all = small_config();
+  NeuralConfig one = small_config(GetParam()), all = small_config(GetParam());
   one.threads = 1;
   one.steps = all.steps = 30;
   const std::uint64_t seed = neural_seed(e.snapshot_digest);
@@ -75,10 +83,10 @@ TEST(NeuralField, TrainingIsTheSameBytesOnOneThreadAndOnAll) {
 // The property that matters: the trained field reproduces the analytic one it stands for, on
 // points it was not trained on, far better than the best constant does: the density everywhere,
 // the colour where the field is dense enough to show it.
-TEST(NeuralField, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
+TEST_P(NeuralNetworks, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
   const r1::Epoch e = blob_epoch(800);
   const Scene s = make_scene(e);
-  auto f = train_neural_field(s, small_config(), neural_seed(e.snapshot_digest));
+  auto f = train_neural_field(s, small_config(GetParam()), neural_seed(e.snapshot_digest));
   ASSERT_TRUE(f.is_ok()) << f.status().message();
   EXPECT_LT(f->loss_last, 0.5 * f->loss_first);
   const FieldFrame ff = far_field_frame(s);
@@ -366,10 +374,12 @@ TEST(NeuralField, LocalUpdateStepsOnlyTheCellsOfItsBox) {
   EXPECT_FALSE(scene_change(ids, before, other, after).comparable);
 }
 
-TEST(NeuralField, FileRoundTripsAndRejectsDamage) {
+TEST_P(NeuralNetworks, FileRoundTripsAndRejectsDamage) {
   const r1::Epoch e = blob_epoch(200);
   const Scene s = make_scene(e);
-  auto f = train_small(s, 5, 1);
+  NeuralConfig config = small_config(GetParam());
+  config.steps = 5;
+  auto f = train_neural_field(s, config, 1);
   ASSERT_TRUE(f.is_ok());
   const std::string bytes = encode_neural_field(*f, digest_of(e));
   auto back = decode_neural_field(bytes, "field.nrf", digest_of(e));
@@ -406,6 +416,112 @@ TEST(NeuralField, FileRoundTripsAndRejectsDamage) {
   EXPECT_NE(kept->evaluate(x, wide).density, f->evaluate(x, wide).density);
   square.fade_power = 3;
   EXPECT_FALSE(decode_neural_field(encode_neural_field(square, digest_of(e)), "field.nrf", digest_of(e)).is_ok());
+  // A block width that is not half the hidden width is refused (R1-NRF-003, 030).
+  NeuralField odd = *f;
+  odd.config.block = GetParam() == 0 ? 7 : GetParam() + 1;
+  auto refused = decode_neural_field(encode_neural_field(odd, digest_of(e)), "field.nrf", digest_of(e));
+  ASSERT_FALSE(refused.is_ok());
+  EXPECT_NE(refused.status().message().find("block"), std::string::npos) << refused.status().message();
+}
+
+// The block the network runs (R1-NRF-003) is 7.1's Clifford render block as r1's fp64
+// primitives define it (clifford::clifford_block, R1-RND-104): the same function of H and C,
+// within float rounding, and C passed on unchanged.
+TEST(NeuralField, TheBlockIsTheCliffordPrimitivesBlock) {
+  const r1::Epoch e = blob_epoch(200);
+  const Scene s = make_scene(e);
+  NeuralConfig config = small_config(16);
+  config.hidden = 32;
+  config.steps = 3;
+  auto f = train_neural_field(s, config, 5);
+  ASSERT_TRUE(f.is_ok()) << f.status().message();
+  const std::uint32_t d = 16, nf = 2 * static_cast<std::uint32_t>(kNeuralShifts.size()) * d;
+  // Parameters far from their start, so every term of the block shows.
+  auto draw = [](std::uint64_t item, std::uint64_t dim) { return static_cast<float>(2 * r1::rng::uniform_double(31, item, dim) - 1); };
+  for (std::uint32_t ch = 0; ch < d; ++ch) {
+    f->gamma[ch] = 0.5f * draw(ch, 0);
+    f->bc[ch] = 0.3f * draw(ch, 1);
+    f->bg[ch] = draw(ch, 2);
+  }
+  for (std::size_t k = 0; k < f->wc.size(); ++k) f->wc[k] = 0.3f * draw(k, 3);
+  r1::clifford::BlockParams bp;
+  bp.w = r1::clifford::zeros(nf, d);
+  bp.wg = r1::clifford::zeros(2 * d, d);
+  for (std::uint32_t o = 0; o < d; ++o) {
+    for (std::uint32_t i = 0; i < nf; ++i) bp.w.at(i, o) = static_cast<double>(f->wc[std::size_t{o} * nf + i]);
+    for (std::uint32_t i = 0; i < 2 * d; ++i) bp.wg.at(i, o) = static_cast<double>(f->wg[std::size_t{o} * 2 * d + i]);
+    bp.bias.push_back(static_cast<double>(f->bc[o]));
+    bp.bg.push_back(static_cast<double>(f->bg[o]));
+    bp.gamma.push_back(static_cast<double>(f->gamma[o]));
+  }
+  double worst = 0;
+  for (std::uint64_t row = 0; row < 50; ++row) {
+    // A first layer's output: ReLU'd, so some channels are 0.
+    std::vector<float> h1(2 * d), x2(2 * d);
+    for (std::uint32_t k = 0; k < 2 * d; ++k) h1[k] = std::max(0.0f, 2 * draw(row, 10 + k));
+    r1::render::detail::neural_block(*f, h1.data(), x2.data());
+    r1::clifford::Rows H = r1::clifford::zeros(1, d), C = r1::clifford::zeros(1, d);
+    for (std::uint32_t k = 0; k < d; ++k) {
+      H.at(0, k) = static_cast<double>(h1[k]);
+      C.at(0, k) = static_cast<double>(h1[d + k]);
+    }
+    auto want = r1::clifford::clifford_block(H, C, kNeuralShifts, bp);
+    ASSERT_TRUE(want.is_ok()) << want.status().message();
+    for (std::uint32_t k = 0; k < d; ++k) {
+      const double diff = std::fabs(static_cast<double>(x2[k]) - want->at(0, k));
+      worst = std::max(worst, diff / (1 + std::fabs(want->at(0, k))));
+      EXPECT_EQ(x2[d + k], h1[d + k]);
+    }
+  }
+  EXPECT_LT(worst, 2e-5);
+  // Without the block the second layer reads the first's output as it is.
+  NeuralField plain = *f;
+  plain.config.block = 0;
+  std::vector<float> h1(2 * d, 0.25f), x2(2 * d);
+  r1::render::detail::neural_block(plain, h1.data(), x2.data());
+  EXPECT_EQ(x2, h1);
+}
+
+// The backward pass training runs is the loss's derivative: for each parameter group (each layer's
+// weights and biases, the block's), the loss's finite difference along the group's gradient
+// direction is the gradient's norm.
+TEST_P(NeuralNetworks, TheGradientIsTheLossesDerivative) {
+  const r1::Epoch e = blob_epoch(300);
+  const Scene s = make_scene(e);
+  NeuralConfig config = small_config(GetParam());
+  config.steps = 20;
+  auto f = train_neural_field(s, config, 9);
+  ASSERT_TRUE(f.is_ok()) << f.status().message();
+  // The block far from its start (residual scale about 1, its map 20 times its start), so its
+  // terms, the wedge's small ones included, weigh in every gradient.
+  for (std::size_t ch = 0; ch < f->gamma.size(); ++ch) f->gamma[ch] = static_cast<float>(2 * r1::rng::uniform_double(13, ch, 0) - 1);
+  for (float& w : f->wc) w *= 20;
+  constexpr std::uint32_t kPoints = 256;
+  const auto at = r1::render::detail::neural_loss_gradient(s, *f, kPoints, 9);
+  std::vector<std::vector<float>*> groups = {&f->w1, &f->b1, &f->w2, &f->b2, &f->w3, &f->b3};
+  if (GetParam() > 0) groups.insert(groups.end(), {&f->wc, &f->bc, &f->wg, &f->bg, &f->gamma});
+  const char* names[] = {"w1", "b1", "w2", "b2", "w3", "b3", "wc", "bc", "wg", "bg", "gamma"};
+  std::size_t offset = 0;
+  for (std::size_t gi = 0; gi < groups.size(); ++gi) {
+    std::vector<float>& p = *groups[gi];
+    double norm = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) norm += static_cast<double>(at.gradient[offset + k]) * static_cast<double>(at.gradient[offset + k]);
+    norm = std::sqrt(norm);
+    ASSERT_GT(norm, 0) << names[gi];
+    const std::vector<float> saved = p;
+    auto loss_at = [&](double h) {
+      for (std::size_t k = 0; k < p.size(); ++k)
+        p[k] = static_cast<float>(static_cast<double>(saved[k]) + h * static_cast<double>(at.gradient[offset + k]) / norm);
+      return r1::render::detail::neural_loss_gradient(s, *f, kPoints, 9).loss;
+    };
+    const double h = 1e-3;
+    const double slope = (loss_at(h) - loss_at(-h)) / (2 * h);
+    p = saved;
+    // Within 1%: the differences measured within 0.4%, a wedge term's sign flipped misses by 2 to 7%.
+    EXPECT_NEAR(slope, norm, 0.01 * norm) << names[gi];
+    offset += p.size();
+  }
+  EXPECT_EQ(offset, at.gradient.size());
 }
 
 }  // namespace

@@ -399,9 +399,11 @@ class EdgePass {
 
 // A trained neural field (R1-NRF-001..006) as the device's inference reads it (R1-BKD-076): the
 // architecture, the cube and tau range, and every parameter in one float array: the hash grid
-// (levels x 2^log2_table x 2), then w1, b1, w2, b2, w3, b3 (row-major, as NeuralField holds them).
+// (levels x 2^log2_table x 2), then w1, b1, w2, b2, w3, b3 (row-major, as NeuralField holds them),
+// then with the Clifford render block (R1-NRF-003) its wc, bc, wg, bg, gamma.
 struct NeuralData {
   std::uint32_t levels = 0, log2_table = 0, hidden = 0;
+  std::uint32_t block = 0;                 // the Clifford block's width d (0: none; else hidden = 2 d)
   std::vector<std::uint32_t> resolution;  // cells per side, per level
   render::Vec3 lo, centroid;
   double size = 1, tau_lo = 1, tau_hi = 1, kappa = 0;
@@ -472,7 +474,7 @@ class CompositePass {
   ExpConstants exp_;
   // Checks the field, uploads its parameters (buffers 11..13) and returns the inference pass's
   // push constants (the pixel count left 0).
-  Result<std::array<std::uint32_t, 12>> upload_neural(const NeuralData& n, std::uint32_t slots);
+  Result<std::array<std::uint32_t, 18>> upload_neural(const NeuralData& n, std::uint32_t slots);
   std::uint32_t pipeline_ = 0, infer_ = 0;
   std::array<std::uint32_t, 14> buffers_{};
   std::uint64_t inferred_ = 0, rewalked_ = 0;
