@@ -22,6 +22,7 @@ struct ConformCliOptions {
   std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000", tinf_field = "analytic";
   std::string tinf_march = "literal", tinf_size = "480x270";
   std::uint32_t tinf_field_steps = 200;
+  std::string tinf_field_block = "none";
   std::string out = "r1_conformance.toml";
   bool list = false;
 };
@@ -67,6 +68,7 @@ Status run_conform(const ConformCliOptions& o) {
   R1_ASSIGN(const auto tinf_wh, parse_image_size(o.tinf_size, "conform: --tinf-size"));
   co.tinf_width = tinf_wh.first, co.tinf_height = tinf_wh.second;
   co.tinf_field_steps = o.tinf_field_steps;
+  co.tinf_field_clifford = o.tinf_field_block == "clifford";
   if (!o.tinf_epochs.empty()) {
     std::istringstream in(o.tinf_epochs);
     for (std::string w; std::getline(in, w, ',');) co.tinf_epochs.push_back(w);
@@ -123,6 +125,8 @@ void add_conform(CLI::App& app, Runner& selected) {
   cmd->add_option("--tinf-sizes", o->tinf_sizes, "BA graph sizes generated for P_RENDER_TINF (default 1000,10000)");
   cmd->add_option("--tinf-field-steps", o->tinf_field_steps, "with --tinf-field neural: Adam steps of each training (200)")
       ->check(CLI::Range(1u, 1000000u));
+  cmd->add_option("--tinf-field-block", o->tinf_field_block, "with --tinf-field neural: the network, none (default) or clifford")
+      ->check(CLI::IsMember({"none", "clifford"}));
   cmd->add_option("--tinf-march", o->tinf_march,
                   "with --tinf-field neural: literal (every pixel's 128 samples, R1-NRF-033; default) or skipping (the samples some node reaches)");
   cmd->add_option("--tinf-size", o->tinf_size, "P_RENDER_TINF's frame WIDTHxHEIGHT (480x270)");

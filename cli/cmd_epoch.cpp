@@ -44,6 +44,7 @@ struct EpochCliOptions {
   bool no_timings = false;
   bool field = true;  // train the neural field (R1-NRF-030); --no-field skips it
   std::uint32_t field_steps = render::NeuralConfig{}.steps;
+  std::string field_block = "none";
   bool parallel = false;
   bool quiet = false;
   // Incremental epochs (spec/incremental.md): the earlier epoch and the update's settings.
@@ -203,6 +204,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     const render::Scene scene = render::make_scene(e);
     render::NeuralConfig nc;
     nc.steps = c.field_steps;
+    nc.block = c.field_block == "clifford" ? nc.hidden / 2 : 0;
     const std::uint64_t seed = render::neural_seed(e.snapshot_digest);
     std::optional<render::NeuralField> f;
     if (prev_field && e.update && e.update->incremental) {
@@ -276,6 +278,8 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_flag("--field,!--no-field", c->field,
                 "train the T-infinity neural field (field.nrf, for r1 render --field neural; the default), or not");
   cmd->add_option("--field-steps", c->field_steps, "the neural field's Adam steps (200)")->check(CLI::Range(1u, 1000000u));
+  cmd->add_option("--field-block", c->field_block, "the neural field's network: none (default) or clifford (R-1.0 7.1's render block)")
+      ->check(CLI::IsMember({"none", "clifford"}));
   cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");
   cmd->add_flag("--parallel", c->parallel, "reference stages on every core: spectral, focus, encoding, hierarchy (same bits)");
   cmd->add_flag("-q,--quiet", c->quiet, "no summary");

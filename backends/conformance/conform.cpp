@@ -273,8 +273,10 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
         const auto t0 = std::chrono::steady_clock::now();
         render::NeuralConfig nc;
         nc.steps = o.tinf_field_steps;
+        nc.block = o.tinf_field_clifford ? nc.hidden / 2 : 0;
         R1_ASSIGN(field, render::train_neural_field(neural_scene, nc, render::neural_seed(e.snapshot_digest)));
-        trained = "; neural field trained in " + g3(seconds_since(t0)) + " s";
+        trained = std::string("; neural field") + (nc.block > 0 ? " with the Clifford block" : "") + " trained in " +
+                  g3(seconds_since(t0)) + " s";
         neural_scene.neural = &field;
       }
       // The least frame time over at least 3 frames and 1 s of frames (at most 100): timer and

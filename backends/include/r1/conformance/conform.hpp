@@ -27,6 +27,7 @@ struct ConformOptions {
   // neural field trained for each epoch, drawn by the reference renderer.
   bool tinf_neural = false;
   std::uint32_t tinf_field_steps = 200;  // its training's Adam steps (R1-NRF-011)
+  bool tinf_field_clifford = false;      // its network with the Clifford render block (R1-NRF-003)
   // With the neural field: its literal march (every pixel's samples, R1-NRF-033) instead of the
   // skipping one.
   bool tinf_literal = false;
