@@ -5,6 +5,9 @@ add_compile_options(
   -fno-finite-math-only
   -Wall -Wextra -Wshadow -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Wunused
   -Woverloaded-virtual -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
+# Eigen's own fast math (on by default) computes a float vector's sqrt from an approximate
+# reciprocal and one Newton step: off, so Eigen's array sqrt is IEEE's like std::sqrt.
+add_compile_definitions(EIGEN_FAST_MATH=0)
 if(R1_WERROR)
   add_compile_options(-Werror)
 endif()
