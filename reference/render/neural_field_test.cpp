@@ -54,9 +54,9 @@ NeuralConfig small_config(std::uint32_t block = 0) {
   return c;
 }
 
-// A field of scene s trained with small_config() for `steps` Adam steps.
-r1::Result<NeuralField> train_small(const Scene& s, std::uint32_t steps, std::uint64_t seed) {
-  NeuralConfig c = small_config();
+// A field of scene s trained with small_config(block) for `steps` Adam steps.
+r1::Result<NeuralField> train_small(const Scene& s, std::uint32_t steps, std::uint64_t seed, std::uint32_t block = 0) {
+  NeuralConfig c = small_config(block);
   c.steps = steps;
   return train_neural_field(s, c, seed);
 }
@@ -377,9 +377,7 @@ TEST(NeuralField, LocalUpdateStepsOnlyTheCellsOfItsBox) {
 TEST_P(NeuralNetworks, FileRoundTripsAndRejectsDamage) {
   const r1::Epoch e = blob_epoch(200);
   const Scene s = make_scene(e);
-  NeuralConfig config = small_config(GetParam());
-  config.steps = 5;
-  auto f = train_neural_field(s, config, 1);
+  auto f = train_small(s, 5, 1, GetParam());
   ASSERT_TRUE(f.is_ok());
   const std::string bytes = encode_neural_field(*f, digest_of(e));
   auto back = decode_neural_field(bytes, "field.nrf", digest_of(e));
@@ -488,9 +486,7 @@ TEST(NeuralField, TheBlockIsTheCliffordPrimitivesBlock) {
 TEST_P(NeuralNetworks, TheGradientIsTheLossesDerivative) {
   const r1::Epoch e = blob_epoch(300);
   const Scene s = make_scene(e);
-  NeuralConfig config = small_config(GetParam());
-  config.steps = 20;
-  auto f = train_neural_field(s, config, 9);
+  auto f = train_small(s, 20, 9, GetParam());
   ASSERT_TRUE(f.is_ok()) << f.status().message();
   // The block far from its start (residual scale about 1, its map 20 times its start), so its
   // terms, the wedge's small ones included, weigh in every gradient.
