@@ -35,7 +35,7 @@ struct RenderCliOptions {
   std::vector<double> eye, target, up;
   double fov = 0, time = 0, distance = 0;
   bool no_edges = false, no_labels = false, no_field = false, quiet = false, legibility = false;
-  std::string field = "analytic", field_file, march = "skipping";
+  std::string field = "auto", field_file, march = "skipping";
   std::string path, write_path;  // R1-VIEW-050: a camera path (warp:QUERY, follow:SECONDS) and its poses
   double fps = 30;
   BackendOption backend;
@@ -188,20 +188,22 @@ Status run_render(const RenderCliOptions& c) {
   // The cameras are placed from the reference's scene summary (centroid, fitted distance); the
   // frames are the chosen backend's (R1-BKD-016).
   render::Scene scene = render::make_scene(e);
-  // --field neural (R1-NRF-031): the trained field draws pure T-infinity frames, with the
-  // reference renderer (no backend's passes draw it yet).
-  if (c.field != "analytic" && c.field != "neural") return Status::input("render: --field must be analytic or neural");
+  // --field neural (R1-NRF-031): the trained field draws pure T-infinity frames. The default,
+  // auto, is neural where the epoch has its field (R1-NRF-031; r1 epoch writes one) and the
+  // analytic oracle where it has none.
+  if (c.field != "analytic" && c.field != "neural" && c.field != "auto")
+    return Status::input("render: --field must be auto, analytic or neural");
   if (c.march != "skipping" && c.march != "literal") return Status::input("render: --march must be skipping or literal");
-  if (c.march == "literal" && c.field != "neural") return Status::input("render: --march literal is the neural field's march: add --field neural");
+  const std::string nrf = field_path(c.dir, c.field_file);
+  const bool use_neural = c.field == "neural" || (c.field == "auto" && fs::exists(nrf));
+  if (c.march == "literal" && !use_neural) return Status::input("render: --march literal is the neural field's march: add --field neural");
   render::NeuralField neural;
   std::string neural_bytes;
-  const bool use_neural = c.field == "neural";
   if (use_neural) {
-    const std::string path = field_path(c.dir, c.field_file);
-    if (!fs::exists(path)) return Status::input(path + ": no neural field here (make it with r1 train-field " + c.dir + ")");
-    R1_ASSIGN(const auto in, InputFile::open(path));
+    if (!fs::exists(nrf)) return Status::input(nrf + ": no neural field here (make it with r1 train-field " + c.dir + ")");
+    R1_ASSIGN(const auto in, InputFile::open(nrf));
     neural_bytes = std::string(in->text());
-    R1_ASSIGN(neural, render::decode_neural_field(neural_bytes, path, e.snapshot_digest));
+    R1_ASSIGN(neural, render::decode_neural_field(neural_bytes, nrf, e.snapshot_digest));
     scene.neural = &neural;
   }
   // T0 content comes with the epoch (R1-RND-136): drawn by the reference renderer's content pass;
@@ -317,7 +319,9 @@ void add_render(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-edges", c->no_edges, "draw no edges");
   cmd->add_flag("--no-labels", c->no_labels, "draw no T1 labels");
   cmd->add_flag("--no-field", c->no_field, "no T-infinity field (sub-pixel particles vanish)");
-  cmd->add_option("--field", c->field, "T-infinity field: analytic (the oracle, default) or neural (trained by r1 train-field)");
+  cmd->add_option("--field", c->field,
+                  "T-infinity field: auto (neural where the epoch has its field.nrf, else analytic; the default), "
+                  "analytic (the oracle) or neural (trained by r1 epoch or r1 train-field)");
   cmd->add_option("--field-file", c->field_file, "the trained field (default: EPOCH_DIR/field.nrf)");
   cmd->add_option("--march", c->march,
                   "the neural field's march: skipping (samples some node reaches, the default) or literal (every pixel's 128 samples, R1-NRF-033)");

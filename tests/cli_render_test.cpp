@@ -141,6 +141,22 @@ TEST_F(CliRender, TrainFieldAndRenderWithIt) {
   r = run_cli({"render", at("ef").string(), "--distance", "200000", "--size", "48x32", "--field", "neural", "-o", at("ef.png").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("field: neural"), std::string::npos) << r.out;
+  // The default field is the epoch's neural one where it has one (R1-NRF-031): the same frame as
+  // --field neural; --field analytic draws the oracle's; an epoch without field.nrf the oracle's.
+  r = run_cli({"render", at("ef").string(), "--distance", "200000", "--size", "48x32", "-o", at("ef-auto.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("field: neural"), std::string::npos) << r.out;
+  EXPECT_EQ(r1::test::read_file(at("ef-auto.png")), r1::test::read_file(at("ef.png")));
+  r = run_cli({"render", at("ef").string(), "--distance", "200000", "--size", "48x32", "--field", "analytic", "-o",
+               at("ef-analytic.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("field: neural"), std::string::npos) << r.out;
+  EXPECT_NE(r1::test::read_file(at("ef-analytic.png")), r1::test::read_file(at("ef.png")));
+  r = run_cli({"epoch", (dir_->path() / "g.graph").string(), "-q", "--no-field", "-o", at("nf").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli({"render", at("nf").string(), "--distance", "200000", "--size", "48x32", "-o", at("nf.png").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r1::test::read_file(at("nf.png")), r1::test::read_file(at("ef-analytic.png")));
   fs::copy(epoch(), at("copy"), fs::copy_options::recursive);
   r = run_cli({"train-field", at("copy").string(), "--samples", "4096", "--batch", "1024", "--steps", "3", "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
