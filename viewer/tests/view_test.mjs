@@ -175,7 +175,7 @@ try {
     await page.evaluate(() => window.r1view.frame());
     await page.locator('#gl').screenshot({ path: pagePng, timeout: 90000 });  // software WebGL beside other tests
     execFileSync(r1, ['render', epoch, '--eye', ...e.map(String), '--target', '0', '0', '0', '--size', '480x270', '--no-labels',
-                      '-o', refPng, '-q']);
+                      '--field', 'analytic', '-o', refPng, '-q']);
     let out;
     try { out = execFileSync(r1, ['diff', pagePng, refPng, '--json', '--fail-mean', '1000']).toString(); } catch (err) { out = err.stdout.toString(); }
     const d = JSON.parse(out);
