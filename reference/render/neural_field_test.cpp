@@ -86,7 +86,10 @@ TEST_P(NeuralNetworks, TrainingIsTheSameBytesOnOneThreadAndOnAll) {
 TEST_P(NeuralNetworks, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
   const r1::Epoch e = blob_epoch(800);
   const Scene s = make_scene(e);
-  auto f = train_neural_field(s, small_config(GetParam()), neural_seed(e.snapshot_digest));
+  NeuralConfig config = small_config(GetParam());
+  // The block makes a step 3 times as costly (130 s under the sanitizers at the full batch).
+  if (GetParam() > 0) config.batch /= 4;
+  auto f = train_neural_field(s, config, neural_seed(e.snapshot_digest));
   ASSERT_TRUE(f.is_ok()) << f.status().message();
   EXPECT_LT(f->loss_last, 0.5 * f->loss_first);
   const FieldFrame ff = far_field_frame(s);
@@ -113,7 +116,9 @@ TEST_P(NeuralNetworks, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
     colour_err += length(colour_got[k] - colour_want[k]);
     colour_spread += length(colour_want[k] - colour_mean);
   }
-  EXPECT_LT(colour_err, 0.4 * colour_spread) << "colour: mean |error| " << colour_err / colour_want.size() << " against spread "
+  // Measured (both networks): the colour's error 0.006-0.009 of its spread, the density's
+  // 0.053-0.055; the bounds leave a factor of 3 to 5.
+  EXPECT_LT(colour_err, 0.05 * colour_spread) << "colour: mean |error| " << colour_err / colour_want.size() << " against spread "
                                             << colour_spread / colour_want.size();
   double mean = 0;
   for (double t : truth) mean += t / static_cast<double>(truth.size());
@@ -122,7 +127,7 @@ TEST_P(NeuralNetworks, ApproximatesTheAnalyticFieldOnHeldOutPoints) {
     err += std::fabs(guess[k] - truth[k]);
     spread += std::fabs(truth[k] - mean);
   }
-  EXPECT_LT(err, 0.5 * spread) << "mean |error| " << err / truth.size() << " against spread " << spread / truth.size();
+  EXPECT_LT(err, 0.15 * spread) << "mean |error| " << err / truth.size() << " against spread " << spread / truth.size();
 }
 
 // The far field summed particle by particle, independently of the hierarchy: the kernel sum of
