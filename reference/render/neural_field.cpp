@@ -674,8 +674,9 @@ SetMoments moments(const std::vector<Sample>& set) {
 }
 
 // The parameters Adam trains besides the grid, in gradient order: w1, b1, w2, b2, w3, b3, then the
-// block's wc, bc, wg, bg, gamma (empty without one).
-std::array<std::vector<float>*, 11> mlp_parts(NeuralField& f) {
+// block's wc, bc, wg, bg, gamma (empty without one). Field is NeuralField or const NeuralField.
+template <class Field>
+auto mlp_parts(Field& f) -> std::array<decltype(&f.w1), 11> {
   return {&f.w1, &f.b1, &f.w2, &f.b2, &f.w3, &f.b3, &f.wc, &f.bc, &f.wg, &f.bg, &f.gamma};
 }
 
@@ -721,11 +722,10 @@ double backward(const NeuralField& f, const Mat& X, const Sample* const* points,
   std::array<float*, 11> g{};
   if (gmlp != nullptr) {
     float* at = gmlp;
-    const std::size_t sizes[11] = {f.w1.size(), f.b1.size(), f.w2.size(), f.b2.size(), f.w3.size(), f.b3.size(),
-                                   f.wc.size(), f.bc.size(), f.wg.size(), f.bg.size(), f.gamma.size()};
-    for (int k = 0; k < 11; ++k) {
-      g[static_cast<std::size_t>(k)] = at;
-      at += sizes[k];
+    std::size_t k = 0;
+    for (const std::vector<float>* part : mlp_parts(f)) {
+      g[k++] = at;
+      at += part->size();
     }
   }
   const Mat& in2 = d == 0 ? a.Z1 : a.X2;
@@ -746,8 +746,11 @@ double backward(const NeuralField& f, const Mat& X, const Sample* const* points,
     for (Eigen::Index r = 0; r < rows; ++r)
       for (Eigen::Index ch = 0; ch < D; ++ch) {
         const float h = a.Z1(r, ch), gv = a.G(r, ch), gm = f.gamma[static_cast<std::size_t>(ch)], db = dZ1(r, ch);
-        const float sh = sigmoid_f(h), sa = sigmoid_f(a.A(r, ch));
-        dgamma(ch) += db * (silu_f(h) + sa * gv);
+        // SiLU(h) and sigmoid(h) as silu_f and sigmoid_f round them, from one det_exp.
+        const double eh = clifford::det_exp(-static_cast<double>(h));
+        const auto sh = static_cast<float>(1.0 / (1.0 + eh)), silu_h = static_cast<float>(static_cast<double>(h) / (1.0 + eh));
+        const float sa = sigmoid_f(a.A(r, ch));
+        dgamma(ch) += db * (silu_h + sa * gv);
         const float dbg = db * gm;
         dZ1(r, ch) = db + dbg * (sh * (1.0f + h * (1.0f - sh)));  // SiLU'(h) = s (1 + h (1 - s))
         dG(r, ch) = dbg * sa;
@@ -944,9 +947,8 @@ detail::LossGradient detail::neural_loss_gradient(const Scene& s, const NeuralFi
   for (std::uint32_t p = 0; p < s.n; ++p) every[p] = p;
   const std::vector<Sample> set = make_set(s, f, points, seed ^ kDataSeed, every, nullptr, {});
   const SetMoments mo = moments(set);
-  NeuralField copy = f;
   std::size_t n_mlp = 0;
-  for (const std::vector<float>* v : mlp_parts(copy)) n_mlp += v->size();
+  for (const std::vector<float>* v : mlp_parts(f)) n_mlp += v->size();
   LossGradient out;
   out.gradient.assign(n_mlp, 0.0f);
   std::vector<float> chunk(n_mlp);
