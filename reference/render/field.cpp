@@ -73,14 +73,6 @@ void add_members(const FieldFrame& ff, std::uint32_t id, const Vec3& x, double i
   const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
   const std::uint32_t slot = ff.slot[0].empty() ? FieldFrame::kFarSlot : ff.slot[0][id];
   if (slot == FieldFrame::kBehindSlot) return;
-  if (slot == FieldFrame::kFarSlot && !ff.far_range.empty()) {
-    const auto [begin, end] = ff.far_range[id];
-    for (std::uint32_t k = begin; k < end; ++k) {
-      const FieldFrame::Member& m = ff.members_far[k];
-      acc.add(m.weight, m.position, m.color, x, inv2s2, max_q);
-    }
-    return;
-  }
   if (slot == FieldFrame::kFarSlot) {
     const Scene& s = *ff.scene;
     const double n = s.n;
@@ -117,7 +109,6 @@ NodeField FieldFrame::node(int level, std::uint32_t id) const {
   const std::uint32_t k = slot[L].empty() ? kFarSlot : slot[L][id];
   if (k == kBehindSlot) return {};
   if (k != kFarSlot) return mixed[k];
-  if (!far_nodes[L].empty()) return far_nodes[L][id];
   const NodeData& d = scene->nodes[L][id];
   return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent};
 }
@@ -245,14 +236,43 @@ FieldValue field_exact(const FieldFrame& ff, const Vec3& x, double sigma) {
 
 namespace {
 
-// The walk of R1-RND-054 with its acceptance as a parameter: `accept(node)` says whether a node
-// within reach of x is one Gaussian.
+// The walk of R1-RND-054 with its acceptance as a parameter: `accept(centroid, extent)` says
+// whether a node within reach of x is one Gaussian.
 template <class Accept>
 FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept accept) {
-  const Scene& s = *ff.scene;
   Accumulator acc;
   const double inv = 1.0 / (2 * sigma * sigma);
   const double reach = ff.params.cutoff * sigma;
+  if (ff.far_tree) {
+    // The same walk over the tree in walk order (FieldFrame::FarTree): a node's children are
+    // pushed in the same order, so every node is visited and summed in the same order.
+    const FieldFrame::FarTree& t = *ff.far_tree;
+    const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
+    thread_local std::vector<std::pair<int, std::uint32_t>> stack;
+    stack.clear();
+    for (std::uint32_t id = 0; id < t.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
+    while (!stack.empty()) {
+      const auto [l, id] = stack.back();
+      stack.pop_back();
+      const auto L = static_cast<std::size_t>(l);
+      const FieldFrame::FarTree::Node& nd = t.nodes[L][id];
+      if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
+      if (accept(nd.centroid, nd.extent)) {
+        acc.add(nd.weight, nd.centroid, t.color[L][id], x, inv);
+        continue;
+      }
+      if (l == 0) {
+        for (std::uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+          const FieldFrame::Member& m = t.members[k];
+          acc.add(m.weight, m.position, m.color, x, inv, max_q);
+        }
+        continue;
+      }
+      for (std::uint32_t c = nd.first; c < nd.first + nd.count; ++c) stack.push_back({l - 1, c});
+    }
+    return acc.value(ff.params.kappa, sigma);
+  }
+  const Scene& s = *ff.scene;
   std::vector<std::pair<int, std::uint32_t>> stack;
   for (std::uint32_t id = 0; id < s.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
   while (!stack.empty()) {
@@ -261,7 +281,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
     const auto L = static_cast<std::size_t>(l);
     const NodeField nd = ff.node(l, id);
     if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
-    if (accept(nd)) {
+    if (accept(nd.centroid, nd.extent)) {
       acc.add(nd.weight, nd.centroid, nd.color, x, inv);
       continue;
     }
@@ -305,16 +325,16 @@ const std::vector<double>& graded_table() {
 
 FieldValue field_hierarchical(const FieldFrame& ff, const Vec3& x, double sigma) {
   const double limit = ff.params.theta * sigma;
-  return walk_field(ff, x, sigma, [limit](const NodeField& nd) { return nd.extent <= limit; });
+  return walk_field(ff, x, sigma, [limit](const Vec3&, double extent) { return extent <= limit; });
 }
 
 FieldValue field_graded(const FieldFrame& ff, const Vec3& x, double sigma) {
   const std::vector<double>& table = graded_table();
   const double limit2 = (ff.params.theta * sigma) * (ff.params.theta * sigma);
-  return walk_field(ff, x, sigma, [&](const NodeField& nd) {
-    const double e2 = nd.extent * nd.extent;
+  return walk_field(ff, x, sigma, [&](const Vec3& centroid, double extent) {
+    const double e2 = extent * extent;
     if (e2 <= limit2) return true;  // the plain rule (M <= 1 at every distance)
-    const double gap = std::max(0.0, length(x - nd.centroid) - nd.extent) / sigma;
+    const double gap = std::max(0.0, length(x - centroid) - extent) / sigma;
     const auto i = static_cast<std::size_t>(std::min(gap, kGradedEnd) * kGradedSteps);
     return e2 * table[i] <= limit2;
   });

@@ -66,14 +66,11 @@ struct FieldFrame {
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   FieldParams params;
-  // Of a far-field frame (far_field_frame, every node at its scene aggregate): the aggregates as
-  // node() returns them, per level and node, and per level-0 node its members with weight > 0 in
-  // member order, members_far[far_range[id].first .. far_range[id].second), laid out for the walk
-  // (a node's read is one cache line, a leaf's members contiguous). The same values, so the same
-  // bits, as reading the scene. Empty in the frames of a view.
-  std::array<std::vector<NodeField>, kLevels> far_nodes;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> far_range;
-  std::vector<Member> members_far;
+  // Of a far-field frame (far_field_frame, every node at its scene aggregate): the hierarchy laid
+  // out for the walk (FarTree). The same values, so the same bits, as reading the scene. Null in
+  // the frames of a view.
+  struct FarTree;
+  std::shared_ptr<const FarTree> far_tree;
   // The scene's neural field made ready for the frame's evaluations (R1-NRF-031), when it has one.
   std::shared_ptr<const NeuralInference> neural;
 
@@ -82,6 +79,22 @@ struct FieldFrame {
   double weight(std::uint32_t p) const;
   // Node `id` of `level` this frame.
   NodeField node(int level, std::uint32_t id) const;
+};
+
+// The hierarchy of a far-field frame in walk order (R1-NRF-013): per level, the nodes ordered so
+// that every node's children are one run of the level below, in the hierarchy's child order (the
+// top level in id order), and a leaf's members one run of `members`. A walk that pushes a node's
+// children in that order visits and sums what the walk over the scene's nodes does, in the same
+// order, reading memory in runs instead of one cache line per node at random.
+struct FieldFrame::FarTree {
+  struct Node {
+    Vec3 centroid;
+    double extent = 0, weight = 0;   // weight n phi of the members
+    std::uint32_t first = 0, count = 0;  // children in nodes[level - 1] (a leaf: members)
+  };
+  std::array<std::vector<Node>, kLevels> nodes;
+  std::array<std::vector<Vec3>, kLevels> color;  // beside `nodes`: read only by accepted nodes
+  std::vector<Member> members;                  // field weight > 0, in member order
 };
 
 double tinf_weight(double s, const Tiers& t);

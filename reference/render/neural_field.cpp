@@ -450,23 +450,37 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
   ff.scene = &s;
   ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
   ff.params.cutoff = field_cutoff(p.cutoff, s.n);  // as a view's frame has it (R1-RND-054)
-  // The walk's copies (FieldFrame::far_nodes): what node() and the leaves would read of the scene.
-  std::array<std::vector<NodeField>, kLevels> nodes;  // read through node() before far_nodes is set
-  for (std::size_t l = 0; l < kLevels; ++l) {
-    nodes[l].reserve(s.nodes[l].size());
-    for (std::uint32_t id = 0; id < s.nodes[l].size(); ++id) nodes[l].push_back(ff.node(static_cast<int>(l), id));
-  }
-  ff.far_nodes = std::move(nodes);
+  // The walk's tree (FieldFrame::FarTree): each level in the order its parents list it, from the
+  // top level in id order down; the values node() and the leaves read of the scene.
+  auto tree = std::make_shared<FieldFrame::FarTree>();
+  const auto& levels = s.hierarchy->levels;
+  std::vector<std::uint32_t> order(s.nodes[kLevels - 1].size());  // ids of the level in walk order
+  for (std::uint32_t id = 0; id < order.size(); ++id) order[id] = id;
   const double n = s.n;
-  ff.far_range.reserve(s.nodes[0].size());
-  for (const auto& leaf : s.hierarchy->levels[0]) {
-    const auto begin = static_cast<std::uint32_t>(ff.members_far.size());
-    for (std::uint32_t q : leaf.children) {
-      const double w = n * s.phi[q];
-      if (w > 0) ff.members_far.push_back({s.position[q], s.color[q], w});
+  for (std::size_t l = kLevels; l-- > 0;) {
+    auto& nodes = tree->nodes[l];
+    auto& color = tree->color[l];
+    nodes.reserve(order.size());
+    color.reserve(order.size());
+    std::vector<std::uint32_t> below;
+    for (const std::uint32_t id : order) {
+      const NodeField nf = ff.node(static_cast<int>(l), id);
+      FieldFrame::FarTree::Node nd{nf.centroid, nf.extent, nf.weight, 0, 0};
+      if (l > 0) {
+        nd.first = static_cast<std::uint32_t>(below.size());
+        for (const std::uint32_t c : levels[l][id].children) below.push_back(c);
+      } else {
+        nd.first = static_cast<std::uint32_t>(tree->members.size());
+        for (const std::uint32_t q : levels[0][id].children)
+          if (const double w = n * s.phi[q]; w > 0) tree->members.push_back({s.position[q], s.color[q], w});
+      }
+      nd.count = static_cast<std::uint32_t>((l > 0 ? below.size() : tree->members.size()) - nd.first);
+      nodes.push_back(nd);
+      color.push_back(nf.color);
     }
-    ff.far_range.push_back({begin, static_cast<std::uint32_t>(ff.members_far.size())});
+    order = std::move(below);
   }
+  ff.far_tree = std::move(tree);
   return ff;
 }
 
