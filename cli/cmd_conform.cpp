@@ -21,7 +21,7 @@ struct ConformCliOptions {
   BackendOption backend;
   std::string suite, golden, checks = "all", fps_epoch, tinf_epochs, tinf_sizes = "1000,10000", tinf_field = "analytic";
   std::string tinf_march = "literal", tinf_size = "480x270";
-  std::uint32_t tinf_field_steps = 200;
+  std::uint32_t tinf_field_steps = 120;
   std::string tinf_field_block = "none";
   std::string out = "r1_conformance.toml";
   bool list = false;
@@ -123,7 +123,7 @@ void add_conform(CLI::App& app, Runner& selected) {
   cmd->add_option("--fps-epoch", o->fps_epoch, "epoch directory of a 10^6-particle snapshot for P_RENDER_FPS");
   cmd->add_option("--tinf-epochs", o->tinf_epochs, "extra epoch directories (comma-separated) for P_RENDER_TINF");
   cmd->add_option("--tinf-sizes", o->tinf_sizes, "BA graph sizes generated for P_RENDER_TINF (default 1000,10000)");
-  cmd->add_option("--tinf-field-steps", o->tinf_field_steps, "with --tinf-field neural: Adam steps of each training (200)")
+  cmd->add_option("--tinf-field-steps", o->tinf_field_steps, "with --tinf-field neural: Adam steps of each training (120)")
       ->check(CLI::Range(1u, 1000000u));
   cmd->add_option("--tinf-field-block", o->tinf_field_block, "with --tinf-field neural: the network, none (default) or clifford")
       ->check(CLI::IsMember({"none", "clifford"}));

@@ -277,7 +277,7 @@ void add_epoch(CLI::App& app, Runner& selected) {
   cmd->add_flag("--no-role-shapes", c->no_role_shapes, "all spheres instead of hub/bridge/leaf shapes");
   cmd->add_flag("--field,!--no-field", c->field,
                 "train the T-infinity neural field (field.nrf, for r1 render --field neural; the default), or not");
-  cmd->add_option("--field-steps", c->field_steps, "the neural field's Adam steps (200)")->check(CLI::Range(1u, 1000000u));
+  cmd->add_option("--field-steps", c->field_steps, "the neural field's Adam steps (120)")->check(CLI::Range(1u, 1000000u));
   cmd->add_option("--field-block", c->field_block, "the neural field's network: none (default) or clifford (R-1.0 7.1's render block)")
       ->check(CLI::IsMember({"none", "clifford"}));
   cmd->add_flag("--no-timings", c->no_timings, "leave timings out of the manifest: every byte reproducible");

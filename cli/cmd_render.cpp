@@ -339,7 +339,7 @@ void add_train_field(CLI::App& app, Runner& selected) {
   auto* cmd = app.add_subcommand("train-field", "train the T-infinity neural field of an epoch on its analytic field");
   cmd->add_option("EPOCH_DIR", o->dir, "epoch directory written by r1 epoch")->required();
   cmd->add_option("-o,--out", o->out, "output file (default: EPOCH_DIR/field.nrf)");
-  cmd->add_option("--steps", o->config.steps, "Adam steps (default 200)")->check(CLI::Range(1u, 1000000u));
+  cmd->add_option("--steps", o->config.steps, "Adam steps (default 120)")->check(CLI::Range(1u, 1000000u));
   cmd->add_option("--samples", o->config.samples, "training points (default 65536)")->check(CLI::Range(1u, 1u << 24));
   cmd->add_option("--batch", o->config.batch, "points per step (default 4096)")->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--threads", o->config.threads, "worker threads (default: every core; same bytes)");

@@ -29,7 +29,7 @@ struct NeuralConfig {
   std::uint32_t block = 0;
   std::uint32_t samples = 1u << 16; // training set: points of the scene cube and tau range
   std::uint32_t batch = 1u << 12;
-  std::uint32_t steps = 200;
+  std::uint32_t steps = 120;
   double lr_grid = 1e-2;            // Adam step of the hash-grid entries
   double lr_mlp = 1e-2;             // Adam step of the MLP (R-1.0 7.3 says 1e-3: R1-NRF-011)
   std::uint32_t threads = 0;        // 0: every core; the result does not depend on it

@@ -26,7 +26,7 @@ struct ConformOptions {
   // P_RENDER_TINF's candidate far field (R1-CONF-064): false, the backend's frames; true, the
   // neural field trained for each epoch, drawn by the reference renderer.
   bool tinf_neural = false;
-  std::uint32_t tinf_field_steps = 200;  // its training's Adam steps (R1-NRF-011)
+  std::uint32_t tinf_field_steps = 120;  // its training's Adam steps (R1-NRF-011)
   bool tinf_field_clifford = false;      // its network with the Clifford render block (R1-NRF-003)
   // With the neural field: its literal march (every pixel's samples, R1-NRF-033) instead of the
   // skipping one.
