@@ -341,7 +341,7 @@ void add_train_field(CLI::App& app, Runner& selected) {
   cmd->add_option("-o,--out", o->out, "output file (default: EPOCH_DIR/field.nrf)");
   cmd->add_option("--steps", o->config.steps, "Adam steps (default 120)")->check(CLI::Range(1u, 1000000u));
   cmd->add_option("--samples", o->config.samples, "training points (default 65536)")->check(CLI::Range(1u, 1u << 24));
-  cmd->add_option("--batch", o->config.batch, "points per step (default 4096)")->check(CLI::Range(1u, 1u << 20));
+  cmd->add_option("--batch", o->config.batch, "points per step (default 2048)")->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--threads", o->config.threads, "worker threads (default: every core; same bytes)");
   cmd->add_option("--block", o->block, "the network between its hidden layers: clifford (R-1.0 7.1's render block) or none")
       ->check(CLI::IsMember({"none", "clifford"}));

@@ -28,7 +28,7 @@ struct NeuralConfig {
   // none (R-1.0 7.5's fall-back network), else hidden = 2 d (the first layer's halves are H and C).
   std::uint32_t block = 0;
   std::uint32_t samples = 1u << 16; // training set: points of the scene cube and tau range
-  std::uint32_t batch = 1u << 12;
+  std::uint32_t batch = 1u << 11;
   std::uint32_t steps = 120;
   double lr_grid = 1e-2;            // Adam step of the hash-grid entries
   double lr_mlp = 1e-2;             // Adam step of the MLP (R-1.0 7.3 says 1e-3: R1-NRF-011)
