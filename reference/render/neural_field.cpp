@@ -457,7 +457,7 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
   std::vector<std::uint32_t> order(s.nodes[kLevels - 1].size());  // ids of the level in walk order
   for (std::uint32_t id = 0; id < order.size(); ++id) order[id] = id;
   const double n = s.n;
-  for (std::size_t l = kLevels; l-- > 0;) {
+  for (std::size_t l = kLevels; l-- > 1;) {
     auto& nodes = tree->nodes[l];
     auto& color = tree->color[l];
     nodes.reserve(order.size());
@@ -465,21 +465,35 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
     std::vector<std::uint32_t> below;
     for (const std::uint32_t id : order) {
       const NodeField nf = ff.node(static_cast<int>(l), id);
-      FieldFrame::FarTree::Node nd{nf.centroid, nf.extent, nf.weight, 0, 0};
-      if (l > 0) {
-        nd.first = static_cast<std::uint32_t>(below.size());
-        for (const std::uint32_t c : levels[l][id].children) below.push_back(c);
-      } else {
-        nd.first = static_cast<std::uint32_t>(tree->members.size());
-        for (const std::uint32_t q : levels[0][id].children)
-          if (const double w = n * s.phi[q]; w > 0) tree->members.push_back({s.position[q], s.color[q], w});
-      }
-      nd.count = static_cast<std::uint32_t>((l > 0 ? below.size() : tree->members.size()) - nd.first);
-      nodes.push_back(nd);
+      const auto first = static_cast<std::uint32_t>(below.size());
+      for (const std::uint32_t c : levels[l][id].children) below.push_back(c);
+      nodes.push_back({nf.centroid, nf.extent, nf.weight, first, static_cast<std::uint32_t>(below.size()) - first});
       color.push_back(nf.color);
     }
     order = std::move(below);
   }
+  // The leaves and their members, on every core (a pass over the particles): each leaf's count
+  // of members with weight > 0, their runs' starts, then each leaf's run.
+  const auto leaves = static_cast<std::uint32_t>(order.size());
+  std::vector<std::uint32_t> first(leaves + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t i = r.begin(); i != r.end(); ++i)
+      for (const std::uint32_t q : levels[0][order[i]].children) first[i + 1] += n * s.phi[q] > 0 ? 1 : 0;
+  });
+  for (std::uint32_t i = 0; i < leaves; ++i) first[i + 1] += first[i];
+  tree->nodes[0].resize(leaves);
+  tree->color[0].resize(leaves);
+  tree->members.resize(first[leaves]);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
+      const NodeField nf = ff.node(0, order[i]);
+      tree->nodes[0][i] = {nf.centroid, nf.extent, nf.weight, first[i], first[i + 1] - first[i]};
+      tree->color[0][i] = nf.color;
+      std::uint32_t k = first[i];
+      for (const std::uint32_t q : levels[0][order[i]].children)
+        if (const double w = n * s.phi[q]; w > 0) tree->members[k++] = {s.position[q], s.color[q], w};
+    }
+  });
   ff.far_tree = std::move(tree);
   return ff;
 }
@@ -596,6 +610,10 @@ NeuralField init_field(const Scene& s, const NeuralConfig& c, std::uint64_t seed
   return f;
 }
 
+// The training targets' acceptance (R1-NRF-010): a node no wider than this many sigma is one
+// Gaussian, twice the frames' theta; the network's frames are held to the frames' field.
+constexpr double kTargetTheta = 0.5;
+
 // The training set (R1-NRF-010): `count` points with the analytic far field's targets.
 std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t count, std::uint64_t data_seed,
                              std::span<const std::uint32_t> pool, const std::pair<Vec3, Vec3>* box,
@@ -605,7 +623,10 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
   // the analytic far field.
   // Of a local update (R1-NRF-050): positions in `box` (lo, size per axis) and particles from
   // `pool` (the particles in the box) instead of the cube and every particle.
-  const FieldFrame ff = far_field_frame(s);
+  // The targets' walk takes nodes whole up to kTargetTheta sigma (R1-NRF-010; frames: 0.25).
+  FieldParams target_params;
+  target_params.theta = kTargetTheta;
+  const FieldFrame ff = far_field_frame(s, target_params);
   std::vector<Sample> set(count);
   constexpr std::uint32_t kTruthChunk = 1024;
   const std::uint32_t truth_chunks = (count + kTruthChunk - 1) / kTruthChunk;
@@ -1023,6 +1044,7 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   for (std::uint32_t p = 0; p < s.n; ++p) every[p] = p;
   const std::vector<Sample> set = make_set(s, f, c.samples, seed ^ kDataSeed, every, nullptr, progress);
   fit(f, set, c.batch, c.steps, true, true, progress);
+
   return f;
 }
 
