@@ -261,8 +261,9 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
     // trained for this epoch (its time reported, not counted), drawn by the reference renderer.
     struct Size {
       const Epoch* epoch = nullptr;
+      render::Vec3 centroid;
       render::View view;
-      render::Scene scene;
+      render::Scene scene;  // kept with the neural field only: its training and frames draw from it
       std::unique_ptr<render::NeuralField> field;
       std::string trained;
       double least = std::numeric_limits<double>::infinity(), spent = 0;
@@ -289,13 +290,12 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       ++z.frames;
       return got;
     };
-    auto prepare = [&](const Epoch& e, const render::Vec3& centroid, Size& z) -> Status {
-      z.epoch = &e;
-      z.view = view_at(distance, o.tinf_width, o.tinf_height, centroid);
+    auto prepare = [&](Size& z) -> Status {
+      const Epoch& e = *z.epoch;
+      z.view = view_at(distance, o.tinf_width, o.tinf_height, z.centroid);
       z.view.edges = false;  // edges are not part of the T-infinity tier
       z.view.labels = false;
       if (o.tinf_neural) {
-        z.scene = render::make_scene(e);
         const auto t0 = std::chrono::steady_clock::now();
         render::NeuralConfig nc;
         nc.steps = o.tinf_field_steps;
@@ -337,14 +337,16 @@ Result<ConformReport> conform(backends::Backend& cand, const ConformOptions& o,
       R1_ASSIGN(Epoch e, read_epoch(dir));
       epochs.push_back(std::move(e));
     }
-    std::vector<render::Vec3> centroids;
-    for (const Epoch& e : epochs) {
-      const render::Scene scene = render::make_scene(e);
-      centroids.push_back(scene.centroid);
-      distance = std::max(distance, pure_tinf_distance(scene, view_at(1, o.tinf_width, o.tinf_height, scene.centroid)));
-    }
     std::vector<Size> sizes(epochs.size());
-    for (std::size_t k = 0; k < epochs.size(); ++k) R1_TRY(prepare(epochs[k], centroids[k], sizes[k]));
+    for (std::size_t k = 0; k < epochs.size(); ++k) {
+      Size& z = sizes[k];
+      z.epoch = &epochs[k];
+      render::Scene scene = render::make_scene(epochs[k]);
+      z.centroid = scene.centroid;
+      distance = std::max(distance, pure_tinf_distance(scene, view_at(1, o.tinf_width, o.tinf_height, scene.centroid)));
+      if (o.tinf_neural) z.scene = std::move(scene);
+    }
+    for (Size& z : sizes) R1_TRY(prepare(z));
     // Each size's least frame time over at least 3 frames and 1 s of frames (at most 100), the
     // sizes' frames taken in turn: timer and scheduler noise only ever add time, a 20 ms frame
     // needs many tries to show its least, and a slow spell of the machine then falls on every

@@ -1044,7 +1044,6 @@ Result<NeuralField> train_neural_field(const Scene& s, const NeuralConfig& c, st
   for (std::uint32_t p = 0; p < s.n; ++p) every[p] = p;
   const std::vector<Sample> set = make_set(s, f, c.samples, seed ^ kDataSeed, every, nullptr, progress);
   fit(f, set, c.batch, c.steps, true, true, progress);
-
   return f;
 }
 
