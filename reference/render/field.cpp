@@ -248,27 +248,27 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
     // pushed in the same order, so every node is visited and summed in the same order.
     const FieldFrame::FarTree& t = *ff.far_tree;
     const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
-    thread_local std::vector<std::pair<int, std::uint32_t>> stack;
+    thread_local std::vector<std::uint32_t> stack;
     stack.clear();
-    for (std::uint32_t id = 0; id < t.nodes[kLevels - 1].size(); ++id) stack.push_back({kLevels - 1, id});
+    for (std::uint32_t id = 0; id < t.roots; ++id) stack.push_back(id);
     while (!stack.empty()) {
-      const auto [l, id] = stack.back();
+      const std::uint32_t id = stack.back();
       stack.pop_back();
-      const auto L = static_cast<std::size_t>(l);
-      const FieldFrame::FarTree::Node& nd = t.nodes[L][id];
+      const FieldFrame::FarTree::Node& nd = t.nodes[id];
       if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
       if (accept(nd.centroid, nd.extent)) {
-        acc.add(nd.weight, nd.centroid, t.color[L][id], x, inv);
+        acc.add(nd.weight, nd.centroid, t.color[id], x, inv);
         continue;
       }
-      if (l == 0) {
-        for (std::uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+      const std::uint32_t end = nd.first + nd.count;
+      if (nd.leaf) {
+        for (std::uint32_t k = nd.first; k < end; ++k) {
           const FieldFrame::Member& m = t.members[k];
           acc.add(m.weight, m.position, m.color, x, inv, max_q);
         }
         continue;
       }
-      for (std::uint32_t c = nd.first; c < nd.first + nd.count; ++c) stack.push_back({l - 1, c});
+      for (std::uint32_t c = nd.first; c < end; ++c) stack.push_back(c);
     }
     return acc.value(ff.params.kappa, sigma);
   }

@@ -81,20 +81,27 @@ struct FieldFrame {
   NodeField node(int level, std::uint32_t id) const;
 };
 
-// The hierarchy of a far-field frame in walk order (R1-NRF-013): per level, the nodes ordered so
-// that every node's children are one run of the level below, in the hierarchy's child order (the
-// top level in id order), and a leaf's members one run of `members`. A walk that pushes a node's
-// children in that order visits and sums what the walk over the scene's nodes does, in the same
-// order, reading memory in runs instead of one cache line per node at random.
+// The tree a far-field frame walks (R1-NRF-013), flat: `nodes[0, roots)` are the top, every
+// inner node's children are the run `nodes[first, first + count)` and a leaf's members the run
+// `members[first, first + count)`. Two layouts (far_field_frame):
+// - the hierarchy in walk order: each level in the order its parents list it (the top level in id
+//   order), so a walk that pushes a node's children in that order visits and sums what the walk
+//   over the scene's nodes does, in the same order, reading memory in runs instead of one cache
+//   line per node at random;
+// - a spatial octree over the particles (R1-NRF-014), whose nodes are compact in space, so a
+//   walk takes more of the scene whole within the same bound (the training targets').
 struct FieldFrame::FarTree {
   struct Node {
     Vec3 centroid;
-    double extent = 0, weight = 0;   // weight n phi of the members
-    std::uint32_t first = 0, count = 0;  // children in nodes[level - 1] (a leaf: members)
+    double extent = 0, weight = 0;  // weight n phi of the members
+    std::uint32_t first = 0;
+    std::uint32_t count : 31 = 0;
+    std::uint32_t leaf : 1 = 0;
   };
-  std::array<std::vector<Node>, kLevels> nodes;
-  std::array<std::vector<Vec3>, kLevels> color;  // beside `nodes`: read only by accepted nodes
-  std::vector<Member> members;                  // field weight > 0, in member order
+  std::uint32_t roots = 0;
+  std::vector<Node> nodes;
+  std::vector<Vec3> color;      // beside `nodes`: read only by accepted nodes
+  std::vector<Member> members;  // field weight > 0
 };
 
 double tinf_weight(double s, const Tiers& t);

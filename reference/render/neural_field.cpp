@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <Eigen/Core>
 
@@ -445,55 +446,174 @@ std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
   return format::load_u64(hemera::hash(m).data());  // the digest's first 8 bytes, little-endian
 }
 
-FieldFrame far_field_frame(const Scene& s, const FieldParams& p) {
-  FieldFrame ff;
-  ff.scene = &s;
-  ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
-  ff.params.cutoff = field_cutoff(p.cutoff, s.n);  // as a view's frame has it (R1-RND-054)
-  // The walk's tree (FieldFrame::FarTree): each level in the order its parents list it, from the
-  // top level in id order down; the values node() and the leaves read of the scene.
-  auto tree = std::make_shared<FieldFrame::FarTree>();
+namespace {
+
+// The hierarchy in walk order (FieldFrame::FarTree): each level in the order its parents list it,
+// from the top level in id order down; the values node() and the leaves read of the scene.
+void hierarchy_tree(const FieldFrame& ff, FieldFrame::FarTree& tree) {
+  const Scene& s = *ff.scene;
   const auto& levels = s.hierarchy->levels;
   std::vector<std::uint32_t> order(s.nodes[kLevels - 1].size());  // ids of the level in walk order
   for (std::uint32_t id = 0; id < order.size(); ++id) order[id] = id;
+  tree.roots = static_cast<std::uint32_t>(order.size());
   const double n = s.n;
   for (std::size_t l = kLevels; l-- > 1;) {
-    auto& nodes = tree->nodes[l];
-    auto& color = tree->color[l];
-    nodes.reserve(order.size());
-    color.reserve(order.size());
+    // This level's nodes are [base, base + order.size()); the level below follows them.
+    const auto next = static_cast<std::uint32_t>(tree.nodes.size() + order.size());
     std::vector<std::uint32_t> below;
     for (const std::uint32_t id : order) {
       const NodeField nf = ff.node(static_cast<int>(l), id);
       const auto first = static_cast<std::uint32_t>(below.size());
       for (const std::uint32_t c : levels[l][id].children) below.push_back(c);
-      nodes.push_back({nf.centroid, nf.extent, nf.weight, first, static_cast<std::uint32_t>(below.size()) - first});
-      color.push_back(nf.color);
+      FieldFrame::FarTree::Node nd{nf.centroid, nf.extent, nf.weight, next + first};
+      nd.count = static_cast<std::uint32_t>(below.size()) - first;
+      tree.nodes.push_back(nd);
+      tree.color.push_back(nf.color);
     }
     order = std::move(below);
   }
   // The leaves and their members, on every core (a pass over the particles): each leaf's count
   // of members with weight > 0, their runs' starts, then each leaf's run.
   const auto leaves = static_cast<std::uint32_t>(order.size());
+  const std::size_t base = tree.nodes.size();
   std::vector<std::uint32_t> first(leaves + 1, 0);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
     for (std::uint32_t i = r.begin(); i != r.end(); ++i)
       for (const std::uint32_t q : levels[0][order[i]].children) first[i + 1] += n * s.phi[q] > 0 ? 1 : 0;
   });
   for (std::uint32_t i = 0; i < leaves; ++i) first[i + 1] += first[i];
-  tree->nodes[0].resize(leaves);
-  tree->color[0].resize(leaves);
-  tree->members.resize(first[leaves]);
+  tree.nodes.resize(base + leaves);
+  tree.color.resize(base + leaves);
+  tree.members.resize(first[leaves]);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
     for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
       const NodeField nf = ff.node(0, order[i]);
-      tree->nodes[0][i] = {nf.centroid, nf.extent, nf.weight, first[i], first[i + 1] - first[i]};
-      tree->color[0][i] = nf.color;
+      FieldFrame::FarTree::Node& nd = tree.nodes[base + i];
+      nd = {nf.centroid, nf.extent, nf.weight, first[i]};
+      nd.count = first[i + 1] - first[i];
+      nd.leaf = 1;
+      tree.color[base + i] = nf.color;
       std::uint32_t k = first[i];
       for (const std::uint32_t q : levels[0][order[i]].children)
-        if (const double w = n * s.phi[q]; w > 0) tree->members[k++] = {s.position[q], s.color[q], w};
+        if (const double w = n * s.phi[q]; w > 0) tree.members[k++] = {s.position[q], s.color[q], w};
     }
   });
+}
+
+// Bits 0, 3, 6, .. of the result are v's bits 0, 1, 2, .. (v < 2^21).
+std::uint64_t spread_bits(std::uint64_t v) {
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+// The spatial octree (R1-NRF-014): the particles with weight n phi > 0 in Morton order of their
+// positions (21 bits per axis over their box; ties by particle index), split by octant from the
+// top, a run of one octant passed down without a node, a run of at most kOctreeLeaf particles a
+// leaf. Nodes in breadth-first order, so a node's children are one run; each node's weight,
+// centroid, colour and extent summed over its particles in that order.
+constexpr std::uint32_t kOctreeLeaf = 8;
+void octree(const Scene& s, FieldFrame::FarTree& tree) {
+  const double n = s.n;
+  std::vector<std::uint32_t> live;
+  for (std::uint32_t p = 0; p < s.n; ++p)
+    if (n * s.phi[p] > 0) live.push_back(p);
+  if (live.empty()) return;
+  Vec3 lo = s.position[live[0]], hi = lo;
+  for (const std::uint32_t p : live) {
+    const Vec3& x = s.position[p];
+    lo = Vec3{std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+    hi = Vec3{std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+  }
+  const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  const double scale = side > 0 ? 2097151.0 / side : 0.0;
+  const auto m = static_cast<std::uint32_t>(live.size());
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(m);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, m, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
+      const Vec3 u = (s.position[live[i]] - lo) * scale;
+      const auto cell = [](double v) { return static_cast<std::uint64_t>(std::clamp(v, 0.0, 2097151.0)); };
+      key[i] = {spread_bits(cell(u.x)) | spread_bits(cell(u.y)) << 1 | spread_bits(cell(u.z)) << 2, live[i]};
+    }
+  });
+  tbb::parallel_sort(key.begin(), key.end());
+  struct Span {
+    std::uint32_t begin, end;
+    int shift;  // the lowest bit of the octant digit the run splits at (the digits above are shared)
+  };
+  std::vector<Span> span{{0, m, 60}};
+  tree.roots = 1;
+  tree.nodes.emplace_back();
+  for (std::size_t i = 0; i < span.size(); ++i) {
+    auto [b, e, shift] = span[i];
+    // Pass down while the whole run lies in one octant (the codes are sorted: first and last).
+    while (shift >= 0 && (key[b].first >> shift & 7) == (key[e - 1].first >> shift & 7)) shift -= 3;
+    FieldFrame::FarTree::Node& nd = tree.nodes[i];
+    if (e - b <= kOctreeLeaf || shift < 0) {
+      nd.first = b;
+      nd.count = e - b;
+      nd.leaf = 1;
+      continue;
+    }
+    nd.first = static_cast<std::uint32_t>(span.size());
+    std::uint32_t count = 0;
+    for (std::uint32_t at = b; at < e;) {
+      const std::uint64_t octant = key[at].first >> shift & 7;
+      const auto stop = static_cast<std::uint32_t>(
+          std::partition_point(key.begin() + at, key.begin() + e, [&](const auto& k) { return (k.first >> shift & 7) == octant; }) -
+          key.begin());
+      span.push_back({at, stop, shift - 3});
+      tree.nodes.emplace_back();
+      ++count;
+      at = stop;
+    }
+    tree.nodes[i].count = count;
+  }
+  tree.color.resize(tree.nodes.size());
+  tree.members.resize(m);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, m, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint32_t p = key[i].second;
+      tree.members[i] = {s.position[p], s.color[p], n * s.phi[p]};
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.nodes.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      FieldFrame::FarTree::Node& nd = tree.nodes[i];
+      double w = 0;
+      Vec3 c, col;
+      for (std::uint32_t k = span[i].begin; k < span[i].end; ++k) {
+        const FieldFrame::Member& mb = tree.members[k];
+        w += mb.weight;
+        c += mb.position * mb.weight;
+        col += mb.color * mb.weight;
+      }
+      nd.weight = w;
+      nd.centroid = c / w;
+      tree.color[i] = col / w;
+      double extent = 0;
+      for (std::uint32_t k = span[i].begin; k < span[i].end; ++k)
+        extent = std::max(extent, length(tree.members[k].position - nd.centroid));
+      nd.extent = extent;
+    }
+  });
+}
+
+}  // namespace
+
+FieldFrame far_field_frame(const Scene& s, const FieldParams& p, FarLayout layout) {
+  FieldFrame ff;
+  ff.scene = &s;
+  ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
+  ff.params.cutoff = field_cutoff(p.cutoff, s.n);  // as a view's frame has it (R1-RND-054)
+  auto tree = std::make_shared<FieldFrame::FarTree>();
+  if (layout == FarLayout::kHierarchy)
+    hierarchy_tree(ff, *tree);
+  else
+    octree(s, *tree);
   ff.far_tree = std::move(tree);
   return ff;
 }
@@ -626,7 +746,7 @@ std::vector<Sample> make_set(const Scene& s, const NeuralField& f, std::uint32_t
   // The targets' walk takes nodes whole up to kTargetTheta sigma (R1-NRF-010; frames: 0.25).
   FieldParams target_params;
   target_params.theta = kTargetTheta;
-  const FieldFrame ff = far_field_frame(s, target_params);
+  const FieldFrame ff = far_field_frame(s, target_params, FarLayout::kOctree);
   std::vector<Sample> set(count);
   constexpr std::uint32_t kTruthChunk = 1024;
   const std::uint32_t truth_chunks = (count + kTruthChunk - 1) / kTruthChunk;

@@ -136,8 +136,11 @@ struct SceneChange {
 SceneChange scene_change(std::span<const hemera::Digest> prev_ids, const Scene& prev, std::span<const hemera::Digest> next_ids,
                          const Scene& next);
 
-// The analytic far field the field is trained on: every node at its scene aggregate.
-FieldFrame far_field_frame(const Scene& s, const FieldParams& p = {});
+// The analytic far field the field is trained on: every particle at weight n phi, walked over the
+// hierarchy's nodes at their scene aggregates (kHierarchy, the frames' field) or over a spatial
+// octree of the particles (kOctree, the training targets', R1-NRF-014).
+enum class FarLayout { kHierarchy, kOctree };
+FieldFrame far_field_frame(const Scene& s, const FieldParams& p = {}, FarLayout layout = FarLayout::kHierarchy);
 
 namespace detail {
 // The second layer's input from the first layer's output `h1` (config.hidden floats) into `x2`

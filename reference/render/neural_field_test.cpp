@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -270,6 +271,56 @@ TEST(NeuralField, TheWalkOrderedTreeIsTheScenesWalkBitForBit) {
     kernels += a.kernels;
   }
   EXPECT_GT(kernels, 3000u * 20);  // the points reach many kernels, not none
+}
+
+// R1-NRF-014: the training targets' walk over the spatial octree is R1-RND-055's approximation of
+// every particle's sum, within its bound at the frames' theta and the targets', its colour within
+// 2% of the exact one where the kernel sum is at least 1, and it sums fewer kernels than the walk
+// over the hierarchy at the same points (what it is for).
+TEST(NeuralField, TheOctreesWalkIsWithinTheBoundWithFewerKernels) {
+  const r1::Epoch e = blob_epoch(2000);
+  const Scene s = make_scene(e);
+  for (const double theta : {0.25, 0.5}) {
+    FieldParams p;
+    p.theta = theta;
+    const FieldFrame octree = far_field_frame(s, p, FarLayout::kOctree), hierarchy = far_field_frame(s, p);
+    ASSERT_TRUE(octree.far_tree);
+    ASSERT_EQ(octree.far_tree->members.size(), s.n);
+    const double c = octree.params.cutoff;
+    double total = 0;
+    for (std::uint32_t q = 0; q < s.n; ++q) total += s.n * s.phi[q];
+    std::uint64_t kernels[2] = {0, 0};
+    double worst = 0, worst_colour = 0;
+    for (std::uint64_t k = 0; k < 1500; ++k) {
+      const double sigma = 2 * std::pow(500.0, r1::rng::uniform_double(11, k, 0));
+      const std::uint32_t q = static_cast<std::uint32_t>(r1::rng::uniform_double(11, k, 1) * s.n) % s.n;
+      const Vec3 u{r1::rng::uniform_double(11, k, 2) - 0.5, r1::rng::uniform_double(11, k, 3) - 0.5, r1::rng::uniform_double(11, k, 4) - 0.5};
+      const Vec3 x = k % 2 == 0 ? s.centroid + u * 1200.0 : s.position[q] + u * (2 * sigma);
+      double w = 0;
+      Vec3 colour;
+      for (std::uint32_t r = 0; r < s.n; ++r) {
+        const Vec3 d = s.position[r] - x;
+        const double kr = s.n * s.phi[r] * std::exp(-dot(d, d) / (2 * sigma * sigma));
+        w += kr;
+        colour += s.color[r] * kr;
+      }
+      const FieldValue got = field_graded(octree, x, sigma);
+      kernels[0] += got.kernels;
+      kernels[1] += field_graded(hierarchy, x, sigma).kernels;
+      const double bound = total * (0.5 * theta * theta + std::exp(-0.5 * c * c));
+      ASSERT_LE(std::fabs(got.weight - w), bound) << "theta " << theta << ", point " << k << ", sigma " << sigma;
+      worst = std::max(worst, std::fabs(got.weight - w) / bound);
+      if (theta == 0.25 && w >= 1) {
+        const Vec3 want = colour / w;
+        worst_colour = std::max({worst_colour, std::fabs(got.color.x - want.x), std::fabs(got.color.y - want.y),
+                                 std::fabs(got.color.z - want.z)});
+      }
+    }
+    EXPECT_LE(worst_colour, 0.02) << "theta " << theta;
+    EXPECT_LT(kernels[0], kernels[1]) << "theta " << theta;
+    std::printf("theta %.2f: worst error %.3g of the bound, worst colour %.3g, kernels %llu (octree) against %llu (hierarchy)\n",
+                theta, worst, worst_colour, static_cast<unsigned long long>(kernels[0]), static_cast<unsigned long long>(kernels[1]));
+  }
 }
 
 // R1-NRF-033: the literal march evaluates every pixel's 128 samples, whatever the graph and
