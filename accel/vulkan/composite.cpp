@@ -111,7 +111,10 @@ double field_sigma(double t) {
 
 uint level_of(uint g) { return g < p.level1 ? 0u : (g < p.level2 ? 1u : (g < p.level3 ? 2u : 3u)); }
 
-dvec3 nvec(uint g, uint o) { return dvec3(node[g * 8u + o], node[g * 8u + o + 1u], node[g * 8u + o + 2u]); }
+// A node's row (FieldData::nodes): weight, centroid, colour, extent, then its colour spread
+// (R1-RND-055): the gradient row-major, the colour's low and high ends.
+const uint kNodeStride = 24u;
+dvec3 nvec(uint g, uint o) { return dvec3(node[g * kNodeStride + o], node[g * kNodeStride + o + 1u], node[g * kNodeStride + o + 2u]); }
 
 // The field accumulator of R1-RND-051..053.
 double acc_w; dvec3 acc_c; dvec3 acc_f;
@@ -123,6 +126,23 @@ void acc_add(double weight, dvec3 center, dvec3 color, dvec3 x, double inv2s2, d
   acc_w += kk;
   acc_c = dvec3(acc_c.x + color.x * kk, acc_c.y + color.y * kk, acc_c.z + color.z * kk);
   acc_f = dvec3(acc_f.x + d.x * kk, acc_f.y + d.y * kk, acc_f.z + d.z * kk);
+}
+
+// A node taken whole (R1-RND-055): its colour at x is its mean plus its gradient times
+// (x - centroid) / sigma^2 (inv2s2 = 1 / (2 sigma^2)), clamped into its colour range, in the
+// reference's order of operations.
+void acc_add_node(uint g, dvec3 x, double inv2s2) {
+  uint b = g * kNodeStride;
+  dvec3 c = nvec(g, 1u);
+  precise double two = 2.0LF * inv2s2;
+  precise double u[3] = double[3]((x.x - c.x) * two, (x.y - c.y) * two, (x.z - c.z) * two);
+  double col[3];
+  for (uint j = 0u; j < 3u; ++j) {
+    precise double sum = node[b + 4u + j];
+    for (uint k = 0u; k < 3u; ++k) sum = sum + node[b + 8u + 3u * j + k] * u[k];
+    col[j] = min(max(sum, node[b + 17u + j]), node[b + 20u + j]);
+  }
+  acc_add(node[b], c, dvec3(col[0], col[1], col[2]), x, inv2s2, inf());
 }
 
 bool within_reach(dvec3 x, dvec3 c, double extent, double reach) {
@@ -151,10 +171,10 @@ bool walk(uint op, dvec3 pos, dvec3 d, double t_end, double grow, double theta, 
     uint g = root;
     while (true) {
       bool descend = false;
-      double w = node[g * 8u];
+      double w = node[g * kNodeStride];
       if (w > 0.0LF) {
         dvec3 c = nvec(g, 1u);
-        double extent = node[g * 8u + 7u];
+        double extent = node[g * kNodeStride + 7u];
         // ray_ball within [kNear, t_end]
         precise dvec3 oc = dvec3(pos.x - c.x, pos.y - c.y, pos.z - c.z);
         precise double rr = extent + grow;
@@ -275,7 +295,7 @@ void main() {
         } else {
           for (int c = 0; c < nc && !near; ++c) {
             if (cand_t0[c] > t || cand_t1[c] < t) continue;
-            near = within_reach(xs, nvec(cand_node[c], 1u), node[cand_node[c] * 8u + 7u], reach);
+            near = within_reach(xs, nvec(cand_node[c], 1u), node[cand_node[c] * kNodeStride + 7u], reach);
           }
         }
         if (!near) continue;
@@ -355,9 +375,9 @@ void main() {
         if (cand_t0[c] > t || cand_t1[c] < t) continue;
         any = true;
         uint g = cand_node[c];
-        if (!within_reach(xs, nvec(g, 1u), node[g * 8u + 7u], reach)) continue;
+        if (!within_reach(xs, nvec(g, 1u), node[g * kNodeStride + 7u], reach)) continue;
         if (cand_agg[c]) {
-          acc_add(node[g * 8u], nvec(g, 1u), nvec(g, 4u), xs, inv, inf());
+          acc_add_node(g, xs, inv);
           continue;
         }
         uint m0 = idx[p.member_ptr + g], m1 = idx[p.member_ptr + g + 1u];
@@ -667,8 +687,8 @@ Status CompositePass::draw(const ImpostorCamera& cam, const FieldData& field, co
   const std::size_t pixels = std::size_t{cam.width} * cam.height;
   if (cam.width == 0 || cam.height == 0 || opaque.size() != pixels * 4 || rgba.size() != pixels * 4)
     return Status::input("vulkan composite: the layers are not " + std::to_string(cam.width) + " x " + std::to_string(cam.height));
-  const std::size_t nodes = field.nodes.size() / 8;
-  if (field.level_offset[kLevels] != nodes || field.child_ptr.size() != nodes - field.level_offset[1] + 1 ||
+  const std::size_t nodes = field.nodes.size() / kFieldNodeDoubles;
+  if (field.nodes.size() % kFieldNodeDoubles != 0 || field.level_offset[kLevels] != nodes || field.child_ptr.size() != nodes - field.level_offset[1] + 1 ||
       field.member_ptr.size() != field.level_offset[1] + 1 || field.next.size() != nodes || field.parent.size() != nodes)
     return Status::input("vulkan composite: the field's node tables do not match");
   // Every index table in one buffer, at the offsets the push constants give.

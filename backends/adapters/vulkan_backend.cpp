@@ -239,12 +239,16 @@ vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
     total += static_cast<std::uint32_t>(s.nodes[static_cast<std::size_t>(l)].size());
   }
   fd.level_offset[kLevels] = total;
-  fd.nodes.reserve(std::size_t{total} * 8);
+  fd.nodes.reserve(std::size_t{total} * vk::kFieldNodeDoubles);
   for (int l = 0; l < kLevels; ++l)
     for (std::uint32_t id = 0; id < s.nodes[static_cast<std::size_t>(l)].size(); ++id) {
       const render::NodeField nd = ff.node(l, id);
-      const double row[8] = {nd.weight, nd.centroid.x, nd.centroid.y, nd.centroid.z, nd.color.x, nd.color.y, nd.color.z, nd.extent};
-      fd.nodes.insert(fd.nodes.end(), row, row + 8);
+      const render::ColourSpread& sp = nd.spread;
+      const double row[vk::kFieldNodeDoubles] = {
+          nd.weight,   nd.centroid.x, nd.centroid.y, nd.centroid.z, nd.color.x,  nd.color.y,  nd.color.z,  nd.extent,
+          sp.grad[0],  sp.grad[1],    sp.grad[2],    sp.grad[3],    sp.grad[4],  sp.grad[5],  sp.grad[6],  sp.grad[7],
+          sp.grad[8],  sp.lo.x,       sp.lo.y,       sp.lo.z,       sp.hi.x,     sp.hi.y,     sp.hi.z,     0.0};
+      fd.nodes.insert(fd.nodes.end(), row, row + vk::kFieldNodeDoubles);
     }
   fd.child_ptr.push_back(0);
   fd.next.assign(total, 0xffffffffu);

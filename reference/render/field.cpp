@@ -55,6 +55,12 @@ struct Accumulator {
     c += color * k;
     f += d * k;
   }
+  // A node taken whole (R1-RND-055): its kernel at the centroid, with the colour its spread gives
+  // at x (inv2s2 = 1 / (2 sigma^2), so (x - centroid) 2 inv2s2 = (x - centroid) / sigma^2).
+  void add_node(double weight, const Vec3& centroid, const Vec3& color, const ColourSpread& spread, const Vec3& x,
+                double inv2s2) {
+    add(weight, centroid, spread.at(color, (x - centroid) * (2 * inv2s2)), x, inv2s2);
+  }
   FieldValue value(double kappa, double sigma) const {
     FieldValue v;
     v.weight = w;
@@ -110,7 +116,7 @@ NodeField FieldFrame::node(int level, std::uint32_t id) const {
   if (k == kBehindSlot) return {};
   if (k != kFarSlot) return mixed[k];
   const NodeData& d = scene->nodes[L][id];
-  return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent};
+  return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent, d.spread};
 }
 
 double field_cutoff(double cutoff, std::uint32_t n) {
@@ -168,7 +174,10 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
       nf.centroid = nf.centroid / nf.weight;
       nf.color = nf.color / nf.weight;
       for_each_member(s, l, id, [&](std::uint32_t q) {
-        if (ff.weight(q) > 0) nf.extent = std::max(nf.extent, length(s.position[q] - nf.centroid));
+        const double w = ff.weight(q);
+        if (!(w > 0)) return;
+        nf.extent = std::max(nf.extent, length(s.position[q] - nf.centroid));
+        nf.spread.add(w / nf.weight, s.color[q], nf.color, s.position[q] - nf.centroid);
       });
     }
     ff.slot[L][id] = static_cast<std::uint32_t>(ff.mixed.size());
@@ -257,7 +266,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
       const FieldFrame::FarTree::Node& nd = t.nodes[id];
       if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
       if (accept(nd.centroid, nd.extent)) {
-        acc.add(nd.weight, nd.centroid, t.color[id], x, inv);
+        acc.add_node(nd.weight, nd.centroid, t.color[id], t.spread[id], x, inv);
         continue;
       }
       const std::uint32_t end = nd.first + nd.count;
@@ -282,7 +291,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
     const NodeField nd = ff.node(l, id);
     if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
     if (accept(nd.centroid, nd.extent)) {
-      acc.add(nd.weight, nd.centroid, nd.color, x, inv);
+      acc.add_node(nd.weight, nd.centroid, nd.color, nd.spread, x, inv);
       continue;
     }
     if (l == 0) {
@@ -486,7 +495,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
         const Candidate& c = *cp;
         if (!within_reach(x, c.node.centroid, c.node.extent, reach)) continue;
         if (c.aggregate) {
-          acc.add(c.node.weight, c.node.centroid, c.node.color, x, inv);
+          acc.add_node(c.node.weight, c.node.centroid, c.node.color, c.node.spread, x, inv);
           continue;
         }
         add_members(ff, c.id, x, inv, acc);

@@ -23,11 +23,13 @@ struct FieldValue {
 };
 
 // A node as the field sees it this frame (R1-RND-054): over its members with field weight > 0,
-// their weight sum (0: skip the node), weighted centroid and colour, and largest distance from it.
+// their weight sum (0: skip the node), weighted centroid and colour, largest distance from it, and
+// the colour's spread.
 struct NodeField {
   double weight = 0;
   Vec3 centroid, color;
   double extent = 0;
+  ColourSpread spread;  // the colour's spread over the same members and weights (R1-RND-055)
 };
 
 class NeuralInference;
@@ -100,7 +102,8 @@ struct FieldFrame::FarTree {
   };
   std::uint32_t roots = 0;
   std::vector<Node> nodes;
-  std::vector<Vec3> color;      // beside `nodes`: read only by accepted nodes
+  std::vector<Vec3> color;             // beside `nodes`: read only by accepted nodes
+  std::vector<ColourSpread> spread;    // the same
   std::vector<Member> members;  // field weight > 0
 };
 

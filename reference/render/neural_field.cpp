@@ -469,6 +469,7 @@ void hierarchy_tree(const FieldFrame& ff, FieldFrame::FarTree& tree) {
       nd.count = static_cast<std::uint32_t>(below.size()) - first;
       tree.nodes.push_back(nd);
       tree.color.push_back(nf.color);
+      tree.spread.push_back(nf.spread);
     }
     order = std::move(below);
   }
@@ -484,6 +485,7 @@ void hierarchy_tree(const FieldFrame& ff, FieldFrame::FarTree& tree) {
   for (std::uint32_t i = 0; i < leaves; ++i) first[i + 1] += first[i];
   tree.nodes.resize(base + leaves);
   tree.color.resize(base + leaves);
+  tree.spread.resize(base + leaves);
   tree.members.resize(first[leaves]);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
     for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
@@ -493,6 +495,7 @@ void hierarchy_tree(const FieldFrame& ff, FieldFrame::FarTree& tree) {
       nd.count = first[i + 1] - first[i];
       nd.leaf = 1;
       tree.color[base + i] = nf.color;
+      tree.spread[base + i] = nf.spread;
       std::uint32_t k = first[i];
       for (const std::uint32_t q : levels[0][order[i]].children)
         if (const double w = n * s.phi[q]; w > 0) tree.members[k++] = {s.position[q], s.color[q], w};
@@ -514,7 +517,7 @@ std::uint64_t spread_bits(std::uint64_t v) {
 // positions (21 bits per axis over their box; ties by particle index), split by octant from the
 // top, a run of one octant passed down without a node, a run of at most kOctreeLeaf particles a
 // leaf. Nodes in breadth-first order, so a node's children are one run; each node's weight,
-// centroid, colour and extent summed over its particles in that order.
+// centroid, colour, extent and colour spread summed over its particles in that order.
 constexpr std::uint32_t kOctreeLeaf = 8;
 void octree(const Scene& s, FieldFrame::FarTree& tree) {
   const double n = s.n;
@@ -573,6 +576,7 @@ void octree(const Scene& s, FieldFrame::FarTree& tree) {
     tree.nodes[i].count = count;
   }
   tree.color.resize(tree.nodes.size());
+  tree.spread.resize(tree.nodes.size());
   tree.members.resize(m);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, m, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
     for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
@@ -595,8 +599,11 @@ void octree(const Scene& s, FieldFrame::FarTree& tree) {
       nd.centroid = c / w;
       tree.color[i] = col / w;
       double extent = 0;
-      for (std::uint32_t k = span[i].begin; k < span[i].end; ++k)
-        extent = std::max(extent, length(tree.members[k].position - nd.centroid));
+      for (std::uint32_t k = span[i].begin; k < span[i].end; ++k) {
+        const FieldFrame::Member& mb = tree.members[k];
+        extent = std::max(extent, length(mb.position - nd.centroid));
+        tree.spread[i].add(mb.weight / w, mb.color, tree.color[i], mb.position - nd.centroid);
+      }
       nd.extent = extent;
     }
   });

@@ -93,7 +93,10 @@ Scene make_scene(const Epoch& e) {
       d.centroid = d.phi > 0 ? centroid / d.phi : (d.lo + d.hi) * 0.5;
       d.color = weight > 0 ? color / weight : Vec3{};
       d.radius = std::sqrt(r2);
-      for (std::uint32_t p : members) d.extent = std::max(d.extent, length(s.position[p] - d.centroid));
+      for (std::uint32_t p : members) {
+        d.extent = std::max(d.extent, length(s.position[p] - d.centroid));
+        if (weight > 0) d.spread.add(n * s.phi[p] / weight, s.color[p], d.color, s.position[p] - d.centroid);
+      }
     }
   }
   return s;

@@ -3,6 +3,7 @@
 // edge bundling.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -11,6 +12,37 @@
 #include "r1/spec/vec3.hpp"
 
 namespace r1::render {
+
+// A node's colour beyond its mean (R1-RND-055): the colour's first moment with position over the
+// members, `grad[3 j + k] = sum_i s_i (c_i - cbar)_j (x_i - mu)_k` (s_i = w_i / W, the member's
+// share of the node's weight; row j a colour channel, column k an axis), and the members' colour
+// range per channel. An aggregate taken whole at x with kernel width sigma has the colour
+// `cbar + grad (x - mu) / sigma^2`, clamped into the range: the first-order term of the members'
+// kernel-weighted mean colour, which the mean alone drops.
+struct ColourSpread {
+  std::array<double, 9> grad{};
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  // Adds a member of colour c at offset dx = x_i - mu from the centroid with share s of the
+  // node's weight (mean: the node's mean colour).
+  void add(double share, const Vec3& c, const Vec3& mean, const Vec3& dx) {
+    const double dc[3] = {c.x - mean.x, c.y - mean.y, c.z - mean.z}, d[3] = {dx.x, dx.y, dx.z};
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) grad[static_cast<std::size_t>(3 * j + k)] += share * dc[j] * d[k];
+    lo = Vec3{std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
+    hi = Vec3{std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+  }
+  // The colour at u = (x - mu) / sigma^2 of a node of mean colour `mean`.
+  Vec3 at(const Vec3& mean, const Vec3& u) const {
+    const double m[3] = {mean.x, mean.y, mean.z}, v[3] = {u.x, u.y, u.z}, l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+    double c[3];
+    for (int j = 0; j < 3; ++j) {
+      double sum = m[j];
+      for (int k = 0; k < 3; ++k) sum += grad[static_cast<std::size_t>(3 * j + k)] * v[k];
+      c[j] = std::min(std::max(sum, l[j]), h[j]);
+    }
+    return {c[0], c[1], c[2]};
+  }
+};
 
 struct NodeData {
   Vec3 lo, hi;           // AABB of the members' positions
@@ -21,6 +53,7 @@ struct NodeData {
   Vec3 color;            // (n phi)-weighted mean of the members' linear colour times brightness
   double radius = 0;     // sqrt(sum of member radius^2): the area-equivalent radius for edges
   std::uint32_t count = 0;  // member particles
+  ColourSpread spread;      // the (n phi)-weighted colour's spread (R1-RND-055)
 };
 
 struct NeuralField;

@@ -419,8 +419,12 @@ struct NeuralData {
 // The T-infinity field of one frame, flattened (R1-BKD-070; the host builds it from the
 // reference's FieldFrame). Nodes of every level in one table, level l's node id at global index
 // level_offset[l] + id.
+inline constexpr std::size_t kFieldNodeDoubles = 24;
 struct FieldData {
-  std::vector<double> nodes;  // 8 doubles a node: weight (0: not in the field), centroid, colour, extent
+  // kFieldNodeDoubles a node: weight (0: not in the field), centroid, colour, extent, the colour
+  // spread's gradient (9, row-major: row a channel, column an axis), its colour's low end (3) and
+  // high end (3), 0 (R1-RND-055).
+  std::vector<double> nodes;
   std::array<std::uint32_t, kLevels + 1> level_offset{};
   std::vector<std::uint32_t> child_ptr, child;  // per node of levels 1 and up (global index - level_offset[1]): children, global indices
   std::vector<std::uint32_t> next, parent;      // per node: its next sibling and its parent (0xffffffff: none)
