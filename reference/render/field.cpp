@@ -266,7 +266,10 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
       const FieldFrame::FarTree::Node& nd = t.nodes[id];
       if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
       if (accept(nd.centroid, nd.extent)) {
-        acc.add_node(nd.weight, nd.centroid, t.color[id], t.spread[id], x, inv);
+        if (t.spread.empty())
+          acc.add(nd.weight, nd.centroid, t.color[id], x, inv);
+        else
+          acc.add_node(nd.weight, nd.centroid, t.color[id], t.spread[id], x, inv);
         continue;
       }
       const std::uint32_t end = nd.first + nd.count;

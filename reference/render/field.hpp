@@ -103,7 +103,7 @@ struct FieldFrame::FarTree {
   std::uint32_t roots = 0;
   std::vector<Node> nodes;
   std::vector<Vec3> color;             // beside `nodes`: read only by accepted nodes
-  std::vector<ColourSpread> spread;    // the same
+  std::vector<ColourSpread> spread;    // the same; empty: the nodes' mean colours alone
   std::vector<Member> members;  // field weight > 0
 };
 

@@ -517,7 +517,8 @@ std::uint64_t spread_bits(std::uint64_t v) {
 // positions (21 bits per axis over their box; ties by particle index), split by octant from the
 // top, a run of one octant passed down without a node, a run of at most kOctreeLeaf particles a
 // leaf. Nodes in breadth-first order, so a node's children are one run; each node's weight,
-// centroid, colour, extent and colour spread summed over its particles in that order.
+// centroid, colour and extent summed over its particles in that order. No colour spreads: the
+// targets' aggregates carry their mean colour (R1-NRF-014).
 constexpr std::uint32_t kOctreeLeaf = 8;
 void octree(const Scene& s, FieldFrame::FarTree& tree) {
   const double n = s.n;
@@ -551,7 +552,8 @@ void octree(const Scene& s, FieldFrame::FarTree& tree) {
   tree.roots = 1;
   tree.nodes.emplace_back();
   for (std::size_t i = 0; i < span.size(); ++i) {
-    auto [b, e, shift] = span[i];
+    const std::uint32_t b = span[i].begin, e = span[i].end;
+    int shift = span[i].shift;
     // Pass down while the whole run lies in one octant (the codes are sorted: first and last).
     while (shift >= 0 && (key[b].first >> shift & 7) == (key[e - 1].first >> shift & 7)) shift -= 3;
     FieldFrame::FarTree::Node& nd = tree.nodes[i];
@@ -576,7 +578,6 @@ void octree(const Scene& s, FieldFrame::FarTree& tree) {
     tree.nodes[i].count = count;
   }
   tree.color.resize(tree.nodes.size());
-  tree.spread.resize(tree.nodes.size());
   tree.members.resize(m);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, m, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
     for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
@@ -599,11 +600,8 @@ void octree(const Scene& s, FieldFrame::FarTree& tree) {
       nd.centroid = c / w;
       tree.color[i] = col / w;
       double extent = 0;
-      for (std::uint32_t k = span[i].begin; k < span[i].end; ++k) {
-        const FieldFrame::Member& mb = tree.members[k];
-        extent = std::max(extent, length(mb.position - nd.centroid));
-        tree.spread[i].add(mb.weight / w, mb.color, tree.color[i], mb.position - nd.centroid);
-      }
+      for (std::uint32_t k = span[i].begin; k < span[i].end; ++k)
+        extent = std::max(extent, length(tree.members[k].position - nd.centroid));
       nd.extent = extent;
     }
   });
