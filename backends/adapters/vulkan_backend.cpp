@@ -243,7 +243,7 @@ vk::FieldData field_data(const render::FieldFrame& ff, const render::View& v) {
   for (int l = 0; l < kLevels; ++l)
     for (std::uint32_t id = 0; id < s.nodes[static_cast<std::size_t>(l)].size(); ++id) {
       const render::NodeField nd = ff.node(l, id);
-      const render::ColourSpread& sp = nd.spread;
+      const render::ColourSpread sp = nd.spread != nullptr ? *nd.spread : render::ColourSpread{};
       const double row[vk::kFieldNodeDoubles] = {
           nd.weight,   nd.centroid.x, nd.centroid.y, nd.centroid.z, nd.color.x,  nd.color.y,  nd.color.z,  nd.extent,
           sp.grad[0],  sp.grad[1],    sp.grad[2],    sp.grad[3],    sp.grad[4],  sp.grad[5],  sp.grad[6],  sp.grad[7],

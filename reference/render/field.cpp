@@ -57,9 +57,23 @@ struct Accumulator {
   }
   // A node taken whole (R1-RND-055): its kernel at the centroid, with the colour its spread gives
   // at x (inv2s2 = 1 / (2 sigma^2), so (x - centroid) 2 inv2s2 = (x - centroid) / sigma^2).
+  // The same arithmetic as add(weight, centroid, spread.at(color, (x - centroid) * (2 * inv2s2)),
+  // x, inv2s2), in the same order, written out (the frames' hot path).
   void add_node(double weight, const Vec3& centroid, const Vec3& color, const ColourSpread& spread, const Vec3& x,
                 double inv2s2) {
-    add(weight, centroid, spread.at(color, (x - centroid) * (2 * inv2s2)), x, inv2s2);
+    const Vec3 d = centroid - x;
+    const double q = dot(d, d) * inv2s2;
+    ++kernels;
+    const double k = weight * std::exp(-q);
+    const double s2 = 2 * inv2s2;
+    const double u0 = (x.x - centroid.x) * s2, u1 = (x.y - centroid.y) * s2, u2 = (x.z - centroid.z) * s2;
+    const std::array<double, 9>& g = spread.grad;
+    const double r = std::min(std::max(color.x + g[0] * u0 + g[1] * u1 + g[2] * u2, spread.lo.x), spread.hi.x);
+    const double gr = std::min(std::max(color.y + g[3] * u0 + g[4] * u1 + g[5] * u2, spread.lo.y), spread.hi.y);
+    const double b = std::min(std::max(color.z + g[6] * u0 + g[7] * u1 + g[8] * u2, spread.lo.z), spread.hi.z);
+    w += k;
+    c += Vec3{r, gr, b} * k;
+    f += d * k;
   }
   FieldValue value(double kappa, double sigma) const {
     FieldValue v;
@@ -114,9 +128,13 @@ NodeField FieldFrame::node(int level, std::uint32_t id) const {
   const auto L = static_cast<std::size_t>(level);
   const std::uint32_t k = slot[L].empty() ? kFarSlot : slot[L][id];
   if (k == kBehindSlot) return {};
-  if (k != kFarSlot) return mixed[k];
+  if (k != kFarSlot) {
+    NodeField nf = mixed[k];
+    nf.spread = &mixed_spread[k];
+    return nf;
+  }
   const NodeData& d = scene->nodes[L][id];
-  return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent, d.spread};
+  return {static_cast<double>(scene->n) * d.phi, d.centroid, d.color, d.extent, &d.spread};
 }
 
 double field_cutoff(double cutoff, std::uint32_t n) {
@@ -163,6 +181,7 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
       continue;
     }
     NodeField nf;
+    ColourSpread spread;
     for_each_member(s, l, id, [&](std::uint32_t q) {
       const double w = ff.weight(q);
       if (!(w > 0)) return;
@@ -177,11 +196,12 @@ FieldFrame make_field_frame(const Scene& s, const View& v, const CameraFrame& f,
         const double w = ff.weight(q);
         if (!(w > 0)) return;
         nf.extent = std::max(nf.extent, length(s.position[q] - nf.centroid));
-        nf.spread.add(w / nf.weight, s.color[q], nf.color, s.position[q] - nf.centroid);
+        spread.add(w / nf.weight, s.color[q], nf.color, s.position[q] - nf.centroid);
       });
     }
     ff.slot[L][id] = static_cast<std::uint32_t>(ff.mixed.size());
     ff.mixed.push_back(nf);
+    ff.mixed_spread.push_back(spread);
     if (l == 0) {
       const auto begin = static_cast<std::uint32_t>(ff.members.size());
       for (std::uint32_t q : s.hierarchy->levels[0][id].children) {
@@ -253,8 +273,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
   const double inv = 1.0 / (2 * sigma * sigma);
   const double reach = ff.params.cutoff * sigma;
   if (ff.far_tree) {
-    // The same walk over the tree in walk order (FieldFrame::FarTree): a node's children are
-    // pushed in the same order, so every node is visited and summed in the same order.
+    // The same walk over the particles' octree (FieldFrame::FarTree, the training targets').
     const FieldFrame::FarTree& t = *ff.far_tree;
     const double max_q = 0.5 * ff.params.cutoff * ff.params.cutoff;
     thread_local std::vector<std::uint32_t> stack;
@@ -266,10 +285,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
       const FieldFrame::FarTree::Node& nd = t.nodes[id];
       if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
       if (accept(nd.centroid, nd.extent)) {
-        if (t.spread.empty())
-          acc.add(nd.weight, nd.centroid, t.color[id], x, inv);
-        else
-          acc.add_node(nd.weight, nd.centroid, t.color[id], t.spread[id], x, inv);
+        acc.add(nd.weight, nd.centroid, t.color[id], x, inv);
         continue;
       }
       const std::uint32_t end = nd.first + nd.count;
@@ -294,7 +310,7 @@ FieldValue walk_field(const FieldFrame& ff, const Vec3& x, double sigma, Accept 
     const NodeField nd = ff.node(l, id);
     if (nd.weight <= 0 || !within_reach(x, nd.centroid, nd.extent, reach)) continue;
     if (accept(nd.centroid, nd.extent)) {
-      acc.add_node(nd.weight, nd.centroid, nd.color, nd.spread, x, inv);
+      acc.add_node(nd.weight, nd.centroid, nd.color, *nd.spread, x, inv);
       continue;
     }
     if (l == 0) {
@@ -498,7 +514,7 @@ void march_field(const FieldFrame& ff, const Ray& ray, double t_max, std::uint64
         const Candidate& c = *cp;
         if (!within_reach(x, c.node.centroid, c.node.extent, reach)) continue;
         if (c.aggregate) {
-          acc.add_node(c.node.weight, c.node.centroid, c.node.color, c.node.spread, x, inv);
+          acc.add_node(c.node.weight, c.node.centroid, c.node.color, *c.node.spread, x, inv);
           continue;
         }
         add_members(ff, c.id, x, inv, acc);

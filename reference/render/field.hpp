@@ -29,7 +29,9 @@ struct NodeField {
   double weight = 0;
   Vec3 centroid, color;
   double extent = 0;
-  ColourSpread spread;  // the colour's spread over the same members and weights (R1-RND-055)
+  // The colour's spread over the same members and weights (R1-RND-055), held by the scene's node
+  // or the frame's `mixed_spread`; null for a node of weight 0.
+  const ColourSpread* spread = nullptr;
 };
 
 class NeuralInference;
@@ -49,7 +51,8 @@ struct FieldFrame {
   // when some node of it was classified (the top level, and the children of kMixed and kBehind
   // nodes); an empty level, or an entry left at kFarSlot, lies below a kFar node.
   std::array<std::vector<std::uint32_t>, kLevels> slot;
-  std::vector<NodeField> mixed;
+  std::vector<NodeField> mixed;             // their spreads are `mixed_spread`'s (node() points at them)
+  std::vector<ColourSpread> mixed_spread;   // beside `mixed`
   // Per kMixed level-0 node, its members with field weight > 0 in member order:
   // members[member_range[k].first .. member_range[k].second) for mixed[k].
   struct Member {
@@ -68,9 +71,8 @@ struct FieldFrame {
   double tau_cam = 0;   // 9.5: tau0 (1 + |camera - centroid| / R_scene)^2
   double t_far = 0;     // farthest scene point from the camera (grown by the widest kernel)
   FieldParams params;
-  // Of a far-field frame (far_field_frame, every node at its scene aggregate): the hierarchy laid
-  // out for the walk (FarTree). The same values, so the same bits, as reading the scene. Null in
-  // the frames of a view.
+  // Of the training targets' far-field frame (far_field_frame with FarLayout::kOctree): the
+  // particles' octree the walk runs over instead of the hierarchy. Null in the frames of a view.
   struct FarTree;
   std::shared_ptr<const FarTree> far_tree;
   // The scene's neural field made ready for the frame's evaluations (R1-NRF-031), when it has one.
@@ -83,15 +85,11 @@ struct FieldFrame {
   NodeField node(int level, std::uint32_t id) const;
 };
 
-// The tree a far-field frame walks (R1-NRF-013), flat: `nodes[0, roots)` are the top, every
-// inner node's children are the run `nodes[first, first + count)` and a leaf's members the run
-// `members[first, first + count)`. Two layouts (far_field_frame):
-// - the hierarchy in walk order: each level in the order its parents list it (the top level in id
-//   order), so a walk that pushes a node's children in that order visits and sums what the walk
-//   over the scene's nodes does, in the same order, reading memory in runs instead of one cache
-//   line per node at random;
-// - a spatial octree over the particles (R1-NRF-014), whose nodes are compact in space, so a
-//   walk takes more of the scene whole within the same bound (the training targets').
+// The tree the training targets' walk runs over (R1-NRF-014): a spatial octree of the particles,
+// flat. `nodes[0, roots)` are the top, every inner node's children are the run
+// `nodes[first, first + count)` and a leaf's members the run `members[first, first + count)`.
+// Its nodes are compact in space, so a walk takes more of the scene whole within the same bound
+// than the walk over the hierarchy's clusters. Nodes carry their members' mean colour alone.
 struct FieldFrame::FarTree {
   struct Node {
     Vec3 centroid;
@@ -102,8 +100,7 @@ struct FieldFrame::FarTree {
   };
   std::uint32_t roots = 0;
   std::vector<Node> nodes;
-  std::vector<Vec3> color;             // beside `nodes`: read only by accepted nodes
-  std::vector<ColourSpread> spread;    // the same; empty: the nodes' mean colours alone
+  std::vector<Vec3> color;  // beside `nodes`: read only by accepted nodes
   std::vector<Member> members;  // field weight > 0
 };
 

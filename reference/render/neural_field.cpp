@@ -448,61 +448,6 @@ std::uint64_t neural_seed(std::span<const std::uint8_t> snapshot_digest) {
 
 namespace {
 
-// The hierarchy in walk order (FieldFrame::FarTree): each level in the order its parents list it,
-// from the top level in id order down; the values node() and the leaves read of the scene.
-void hierarchy_tree(const FieldFrame& ff, FieldFrame::FarTree& tree) {
-  const Scene& s = *ff.scene;
-  const auto& levels = s.hierarchy->levels;
-  std::vector<std::uint32_t> order(s.nodes[kLevels - 1].size());  // ids of the level in walk order
-  for (std::uint32_t id = 0; id < order.size(); ++id) order[id] = id;
-  tree.roots = static_cast<std::uint32_t>(order.size());
-  const double n = s.n;
-  for (std::size_t l = kLevels; l-- > 1;) {
-    // This level's nodes are [base, base + order.size()); the level below follows them.
-    const auto next = static_cast<std::uint32_t>(tree.nodes.size() + order.size());
-    std::vector<std::uint32_t> below;
-    for (const std::uint32_t id : order) {
-      const NodeField nf = ff.node(static_cast<int>(l), id);
-      const auto first = static_cast<std::uint32_t>(below.size());
-      for (const std::uint32_t c : levels[l][id].children) below.push_back(c);
-      FieldFrame::FarTree::Node nd{nf.centroid, nf.extent, nf.weight, next + first};
-      nd.count = static_cast<std::uint32_t>(below.size()) - first;
-      tree.nodes.push_back(nd);
-      tree.color.push_back(nf.color);
-      tree.spread.push_back(nf.spread);
-    }
-    order = std::move(below);
-  }
-  // The leaves and their members, on every core (a pass over the particles): each leaf's count
-  // of members with weight > 0, their runs' starts, then each leaf's run.
-  const auto leaves = static_cast<std::uint32_t>(order.size());
-  const std::size_t base = tree.nodes.size();
-  std::vector<std::uint32_t> first(leaves + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
-    for (std::uint32_t i = r.begin(); i != r.end(); ++i)
-      for (const std::uint32_t q : levels[0][order[i]].children) first[i + 1] += n * s.phi[q] > 0 ? 1 : 0;
-  });
-  for (std::uint32_t i = 0; i < leaves; ++i) first[i + 1] += first[i];
-  tree.nodes.resize(base + leaves);
-  tree.color.resize(base + leaves);
-  tree.spread.resize(base + leaves);
-  tree.members.resize(first[leaves]);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, leaves, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
-    for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
-      const NodeField nf = ff.node(0, order[i]);
-      FieldFrame::FarTree::Node& nd = tree.nodes[base + i];
-      nd = {nf.centroid, nf.extent, nf.weight, first[i]};
-      nd.count = first[i + 1] - first[i];
-      nd.leaf = 1;
-      tree.color[base + i] = nf.color;
-      tree.spread[base + i] = nf.spread;
-      std::uint32_t k = first[i];
-      for (const std::uint32_t q : levels[0][order[i]].children)
-        if (const double w = n * s.phi[q]; w > 0) tree.members[k++] = {s.position[q], s.color[q], w};
-    }
-  });
-}
-
 // Bits 0, 3, 6, .. of the result are v's bits 0, 1, 2, .. (v < 2^21).
 std::uint64_t spread_bits(std::uint64_t v) {
   v = (v | v << 32) & 0x1f00000000ffffULL;
@@ -614,12 +559,11 @@ FieldFrame far_field_frame(const Scene& s, const FieldParams& p, FarLayout layou
   ff.scene = &s;
   ff.params = p;  // every slot empty: every node is its scene aggregate (weight n phi)
   ff.params.cutoff = field_cutoff(p.cutoff, s.n);  // as a view's frame has it (R1-RND-054)
-  auto tree = std::make_shared<FieldFrame::FarTree>();
-  if (layout == FarLayout::kHierarchy)
-    hierarchy_tree(ff, *tree);
-  else
+  if (layout == FarLayout::kOctree) {
+    auto tree = std::make_shared<FieldFrame::FarTree>();
     octree(s, *tree);
-  ff.far_tree = std::move(tree);
+    ff.far_tree = std::move(tree);
+  }
   return ff;
 }
 
@@ -661,10 +605,7 @@ std::vector<NeuralField::PriorPart> prior_parts_of(const Scene& s, std::uint32_t
     NeuralField::PriorPart& part = cells[cell[p]];
     if (!(part.mass > 0)) continue;
     const double wp = static_cast<double>(s.n) * s.phi[p];
-    const Vec3 dc = s.color[p] - part.colour, dx = s.position[p] - part.centroid;
-    const double c3[3] = {dc.x, dc.y, dc.z}, x3[3] = {dx.x, dx.y, dx.z};
-    for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) part.gradient[3 * k + a] += wp / part.mass * c3[k] * x3[a];
+    ColourSpread::add_moment(part.gradient, wp / part.mass, s.color[p] - part.colour, s.position[p] - part.centroid);
   }
   std::vector<NeuralField::PriorPart> parts;
   for (NeuralField::PriorPart& part : cells) {

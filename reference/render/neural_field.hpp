@@ -137,8 +137,8 @@ SceneChange scene_change(std::span<const hemera::Digest> prev_ids, const Scene& 
                          const Scene& next);
 
 // The analytic far field the field is trained on: every particle at weight n phi, walked over the
-// hierarchy's nodes at their scene aggregates (kHierarchy, the frames' field) or over a spatial
-// octree of the particles (kOctree, the training targets', R1-NRF-014).
+// hierarchy's nodes at their scene aggregates (kHierarchy, the frames' field: no FarTree) or over
+// a spatial octree of the particles (kOctree, the training targets', R1-NRF-014).
 enum class FarLayout { kHierarchy, kOctree };
 FieldFrame far_field_frame(const Scene& s, const FieldParams& p = {}, FarLayout layout = FarLayout::kHierarchy);
 

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <string>
 
@@ -241,36 +240,6 @@ TEST(NeuralField, AFarViewsFringeFollowsTheAnalyticField) {
     }
   EXPECT_LT(sum / count, 0.05) << "worst " << worst;
   EXPECT_LT(worst, 0.1) << "mean " << sum / count;
-}
-
-// R1-NRF-013: the far-field frame's walk over its tree in walk order is the walk over the scene's
-// nodes bit for bit: the same kernels, summed in the same order, at points near particles and
-// anywhere in the cube, at kernel widths from a fraction of a leaf to the whole scene.
-TEST(NeuralField, TheWalkOrderedTreeIsTheScenesWalkBitForBit) {
-  const r1::Epoch e = blob_epoch(800);
-  const Scene s = make_scene(e);
-  const FieldFrame tree = far_field_frame(s);
-  ASSERT_TRUE(tree.far_tree);
-  FieldFrame scene = tree;
-  scene.far_tree.reset();
-  const auto same = [](const FieldValue& a, const FieldValue& b) {
-    const double x[] = {a.weight, a.density, a.color.x, a.color.y, a.color.z, a.flow.x, a.flow.y, a.flow.z};
-    const double y[] = {b.weight, b.density, b.color.x, b.color.y, b.color.z, b.flow.x, b.flow.y, b.flow.z};
-    return a.kernels == b.kernels && std::memcmp(x, y, sizeof x) == 0;
-  };
-  std::uint64_t kernels = 0;
-  for (std::uint64_t k = 0; k < 3000; ++k) {
-    const double sigma = 0.2 * std::pow(2000.0, r1::rng::uniform_double(7, k, 0));
-    const std::uint32_t p = static_cast<std::uint32_t>(r1::rng::uniform_double(7, k, 1) * s.n) % s.n;
-    const Vec3 u{r1::rng::uniform_double(7, k, 2) - 0.5, r1::rng::uniform_double(7, k, 3) - 0.5, r1::rng::uniform_double(7, k, 4) - 0.5};
-    const Vec3 x = k % 2 == 0 ? s.centroid + u * 1000.0 : s.position[p] + u * sigma;
-    const FieldValue a = field_graded(tree, x, sigma), b = field_graded(scene, x, sigma);
-    ASSERT_TRUE(same(a, b)) << "graded, point " << k << ": " << a.weight << " against " << b.weight;
-    const FieldValue c = field_hierarchical(tree, x, sigma), d = field_hierarchical(scene, x, sigma);
-    ASSERT_TRUE(same(c, d)) << "hierarchical, point " << k << ": " << c.weight << " against " << d.weight;
-    kernels += a.kernels;
-  }
-  EXPECT_GT(kernels, 3000u * 20);  // the points reach many kernels, not none
 }
 
 // R1-NRF-014: the training targets' walk over the spatial octree is R1-RND-055's approximation of

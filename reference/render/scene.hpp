@@ -25,11 +25,15 @@ struct ColourSpread {
   // Adds a member of colour c at offset dx = x_i - mu from the centroid with share s of the
   // node's weight (mean: the node's mean colour).
   void add(double share, const Vec3& c, const Vec3& mean, const Vec3& dx) {
-    const double dc[3] = {c.x - mean.x, c.y - mean.y, c.z - mean.z}, d[3] = {dx.x, dx.y, dx.z};
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) grad[static_cast<std::size_t>(3 * j + k)] += share * dc[j] * d[k];
+    add_moment(grad, share, c - mean, dx);
     lo = Vec3{std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
     hi = Vec3{std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+  }
+  // The first moment alone: grad[3 j + k] += share dc_j dx_k (in that order of products).
+  static void add_moment(std::array<double, 9>& grad, double share, const Vec3& dc, const Vec3& dx) {
+    const double c[3] = {dc.x, dc.y, dc.z}, d[3] = {dx.x, dx.y, dx.z};
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) grad[static_cast<std::size_t>(3 * j + k)] += share * c[j] * d[k];
   }
   // The colour at u = (x - mu) / sigma^2 of a node of mean colour `mean`.
   Vec3 at(const Vec3& mean, const Vec3& u) const {
