@@ -158,7 +158,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   ProgressLine progress;
   const auto t0 = std::chrono::steady_clock::now();
   R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
-  R1_ASSIGN(const Snapshot s, read_snapshot(c.snapshot, ro));
+  R1_ASSIGN(Snapshot s, read_snapshot(c.snapshot, ro));
   // T0 content (R1-EPO-030..033): read before the stages, so a bad side file costs no solve.
   std::optional<render::ContentSet> content;
   if (!c.content.empty()) {
@@ -174,6 +174,12 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   std::vector<hemera::Digest> prev_ids;
   render::Scene prev_scene;
   if (c.from.empty()) {
+    // The digest now, then the link records go: nothing after the digest and the layout graph
+    // reads them, and the spectral stage's basis is the peak they would add to (R1-EPO-005).
+    const auto td = std::chrono::steady_clock::now();
+    o.snapshot_digest = snapshot_digest(s);
+    o.snapshot_digest_seconds = seconds_since(td);
+    std::vector<Link>().swap(s.links);
     R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
   } else {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034).

@@ -138,8 +138,13 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
   Stopwatch clock(e.timings);
   e.domain = o.domain;
   e.source = snapshot.source;
-  e.snapshot_digest = snapshot_digest(snapshot);  // Hemera over every record: its own lap
-  clock.lap("digest");
+  if (o.snapshot_digest) {  // formed by the caller: its time stands for the lap
+    e.snapshot_digest = *o.snapshot_digest;
+    e.timings.push_back({"digest", o.snapshot_digest_seconds});
+  } else {
+    e.snapshot_digest = snapshot_digest(snapshot);  // Hemera over every record: its own lap
+    clock.lap("digest");
+  }
   e.ids = snapshot.particles;
   e.titles.resize(snapshot.particles.size());
   for (std::size_t i = 0; i < e.titles.size(); ++i) {
@@ -152,10 +157,6 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
   }
   e.links = graph.links;
   e.components = graph.component_size.size();
-  // The pairs the renderer draws: the upper triangle of A_sym, rows ascending, columns ascending.
-  for (std::uint32_t i = 0; i < graph.n; ++i)
-    for (std::uint64_t k = graph.row_ptr[i]; k < graph.row_ptr[i + 1]; ++k)
-      if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
   e.out_rows = out_row_digests(graph, snapshot.particles);  // what the next epoch of the chain compares
   e.trikernel = o.trikernel;
   e.spectral_params = o.spectral;
@@ -164,6 +165,13 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
 
 Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, EpochStages& st,
                   const ProgressFn& progress) {
+  // The pairs the renderer draws: the upper triangle of A_sym, rows ascending, columns ascending.
+  // Formed here, after the spectral stage, whose basis is the epoch's peak of memory (R1-EPO-005).
+  e.edges.clear();
+  e.edges.reserve((graph.col.size() + graph.n) / 2);
+  for (std::uint32_t i = 0; i < graph.n; ++i)
+    for (std::uint64_t k = graph.row_ptr[i]; k < graph.row_ptr[i + 1]; ++k)
+      if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
   Stopwatch clock(e.timings);
   // EpochOptions::parallel reaches the encoding and hierarchy stages through their own options
   // (R1-ENC-020, R1-HIER-070): how they run, never what they compute.

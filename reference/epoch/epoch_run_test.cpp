@@ -92,6 +92,30 @@ TEST(EpochRun, RerunsAndThreadCountsGiveIdenticalBytes) {
   }
 }
 
+// R1-EPO-005: with the digest formed by the caller, the stages need none of the snapshot's link
+// records (r1 epoch releases them before the spectral stage): the same epoch, byte for byte. The
+// digest is what the option carries: without it the bare snapshot's epoch is another one.
+TEST(EpochRun, TheCallersDigestLetsTheLinkRecordsGo) {
+  for (const auto& [name, s] : test_graphs()) {
+    SCOPED_TRACE(name);
+    const auto want = files(epoch(s));
+    ASSERT_FALSE(want.empty());
+    auto g = r1::build_graph(s);
+    ASSERT_TRUE(g.is_ok()) << g.status().message();
+    r1::Snapshot bare = s;
+    r1::EpochOptions o;
+    o.snapshot_digest = r1::snapshot_digest(s);
+    std::vector<r1::Link>().swap(bare.links);
+    auto e = r1::run_epoch(bare, *g, o);
+    ASSERT_TRUE(e.is_ok()) << e.status().message();
+    EXPECT_TRUE(files(*e) == want);
+    EXPECT_TRUE(e->snapshot_digest == *o.snapshot_digest);
+    auto other = r1::run_epoch(bare, *g, {});
+    ASSERT_TRUE(other.is_ok()) << other.status().message();
+    EXPECT_FALSE(other->snapshot_digest == *o.snapshot_digest);
+  }
+}
+
 TEST(EpochRun, ManifestWithoutTimingsIsReproducibleOnDisk) {
   r1::test::TempDir d;
   const auto s = test_graphs()[2].second;

@@ -63,6 +63,11 @@ struct EpochOptions {
   EncodingOptions encoding;
   HierarchyOptions hierarchy;
   bool parallel = false;    // TBB in spectral, focus, encoding and hierarchy: bit-identical results (R1-SPEC-071, R1-FOC-090, R1-ENC-020, R1-HIER-070)
+  // The snapshot's digest (R1-IN-040) when the caller formed it already, with the seconds it took:
+  // the epoch takes it as is. Nothing after the digest and the layout graph reads the snapshot's
+  // link records, so a caller that formed both may release them before the stages (R1-EPO-005).
+  std::optional<hemera::Digest> snapshot_digest;
+  double snapshot_digest_seconds = 0;
 };
 
 }  // namespace r1
