@@ -32,18 +32,21 @@ void BM_Permutation(benchmark::State& st) {
 BENCHMARK(BM_Permutation);
 
 // permute_many over `lanes` states: one lockstep batch per call; per_state is the time per state.
+// Second argument: the AVX-512 rounds (1, where the CPU has them) or the scalar ones (0).
 void BM_PermutationLanes(benchmark::State& st) {
   const auto lanes = static_cast<std::size_t>(st.range(0));
+  hm::set_vector_rounds(st.range(1) != 0);
   std::vector<hm::State> s(lanes);
   for (std::size_t k = 0; k < lanes; ++k) s[k] = start_state(k + 1);
   for (auto _ : st) {
     hm::permute_many(s);
     benchmark::DoNotOptimize(s.data());
   }
+  hm::set_vector_rounds(true);
   st.counters["per_state"] = benchmark::Counter(static_cast<double>(st.iterations() * lanes),
                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_PermutationLanes)->Arg(2)->Arg(4)->Arg(8)->Arg(64);
+BENCHMARK(BM_PermutationLanes)->ArgsProduct({{2, 4, 8, 64}, {0, 1}});
 
 void BM_PlainHash(benchmark::State& st) {
   std::vector<std::uint8_t> data(static_cast<std::size_t>(st.range(0)), 0x5A);
@@ -57,10 +60,13 @@ void BM_TreeHash(benchmark::State& st) {
   std::vector<std::uint8_t> data(static_cast<std::size_t>(st.range(0)));
   for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<std::uint8_t>((i * 2654435761u) >> 13);
   const bool parallel = st.range(1) != 0;
+  hm::set_vector_rounds(st.range(2) != 0);
   for (auto _ : st) benchmark::DoNotOptimize(hm::root_hash(data, parallel));
+  hm::set_vector_rounds(true);
   st.SetBytesProcessed(static_cast<std::int64_t>(st.iterations()) * st.range(0));
 }
-BENCHMARK(BM_TreeHash)->Args({64 << 20, 0})->Args({64 << 20, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+// Third argument: the AVX-512 rounds (1) or the scalar ones (0).
+BENCHMARK(BM_TreeHash)->ArgsProduct({{64 << 20}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // 10^5 names of 8..40 bytes, like the particle names of an edge list.
 std::vector<std::string> names() {

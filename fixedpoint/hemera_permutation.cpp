@@ -1,5 +1,13 @@
-// The Hemera permutation, one state or L states in lockstep (R1-HASH-002, R1-HASH-003, R1-HASH-020).
+// The Hemera permutation, one state or L states in lockstep (R1-HASH-002, R1-HASH-003, R1-HASH-020),
+// its rounds on AVX-512 where the CPU has it (R1-HASH-023).
 #include <atomic>
+
+#if defined(__x86_64__)
+#define R1_HEMERA_AVX512 1
+#include <immintrin.h>
+#else
+#define R1_HEMERA_AVX512 0
+#endif
 
 #include "hemera_constants.inc"
 #include "hemera_internal.hpp"
@@ -55,9 +63,11 @@ static_assert(all_canonical(kRoundFull) && all_canonical(kRoundPartial));
 
 // One partial round on L lanes: constant and x^(p-2) on element 0, then the internal matrix
 // x'_i = d_i x_i + sum_j x_j. The sum of elements 1..15 does not depend on the S-box, so it is
-// formed first and overlaps with the inversion.
+// formed first and overlaps with the inversion. The S-box part: element 0 of each lane's state
+// becomes x^(p-2) and sum[k] the lane's sum of all sixteen elements after it (folded: sixteen
+// summands below 2^64 stay below 2^68).
 template <std::size_t L>
-[[gnu::always_inline]] inline void partial_round(State* st, std::size_t r) {
+[[gnu::always_inline]] inline void partial_sbox(State* st, std::size_t r, u64 (&sum)[L]) {
   u64 x[L];
   u128 rest[L];
   for (std::size_t k = 0; k < L; ++k) {
@@ -72,23 +82,142 @@ template <std::size_t L>
     lazy::invert_lanes<L>(x);
   }
   for (std::size_t k = 0; k < L; ++k) {
-    State& s = st[k];
-    // Sixteen summands below 2^64: the 128-bit sum stays below 2^68 and folds once. Each
-    // d_i x_i + sum stays below 2^128: (2^64 - 1)^2 + 2^64 - 1 < 2^128.
-    const u64 sum = lazy::fold(rest[k] + x[k]);
-    s[0] = lazy::reduce(static_cast<u128>(kInternalDiag[0]) * x[k] + sum);
-    for (std::size_t i = 1; i < WIDTH; ++i) s[i] = lazy::reduce(static_cast<u128>(kInternalDiag[i]) * s[i] + sum);
+    st[k][0] = x[k];
+    sum[k] = lazy::fold(rest[k] + x[k]);
   }
 }
 
+template <std::size_t L>
+[[gnu::always_inline]] inline void partial_round(State* st, std::size_t r) {
+  u64 sum[L];
+  partial_sbox<L>(st, r, sum);
+  // Each d_i x_i + sum stays below 2^128: (2^64 - 1)^2 + 2^64 - 1 < 2^128.
+  for (std::size_t k = 0; k < L; ++k)
+    for (std::size_t i = 0; i < WIDTH; ++i) st[k][i] = lazy::reduce(static_cast<u128>(kInternalDiag[i]) * st[k][i] + sum[k]);
+}
+
+#if R1_HEMERA_AVX512
+// The same rounds with eight elements of a state per AVX-512 vector (R1-HASH-023): every
+// multiplication is lazy::mul's, lane by lane (the 128-bit product from four 32-bit products,
+// then lazy::reduce's steps with masks for its carry and borrow), so every value, representative
+// included, is the scalar rounds'.
+// GCC 12 reports the shift builtins' undefined pass-through operand inside avx512fintrin.h as
+// uninitialized (a false positive: every lane of these shifts is defined). Clang has no such
+// warning group.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+namespace avx {
+
+#define R1_AVX512 __attribute__((target("avx512f"), always_inline)) inline
+
+R1_AVX512 __m512i splat(u64 v) { return _mm512_set1_epi64(static_cast<long long>(v)); }
+
+// lazy::reduce of the 128-bit value hi 2^64 + lo.
+R1_AVX512 __m512i reduce(__m512i lo, __m512i hi) {
+  const __m512i eps = splat(gl::EPSILON);
+  const __m512i hh = _mm512_srli_epi64(hi, 32), hl = _mm512_and_si512(hi, eps);
+  const __mmask8 borrow = _mm512_cmplt_epu64_mask(lo, hh);
+  __m512i t0 = _mm512_sub_epi64(lo, hh);
+  t0 = _mm512_mask_sub_epi64(t0, borrow, t0, eps);
+  const __m512i t1 = _mm512_sub_epi64(_mm512_slli_epi64(hl, 32), hl);  // hl EPSILON
+  const __m512i t2 = _mm512_add_epi64(t0, t1);
+  return _mm512_mask_add_epi64(t2, _mm512_cmplt_epu64_mask(t2, t1), t2, eps);
+}
+
+// The 128-bit products a b as (lo, hi).
+R1_AVX512 void product(__m512i a, __m512i b, __m512i& lo, __m512i& hi) {
+  const __m512i ah = _mm512_srli_epi64(a, 32), bh = _mm512_srli_epi64(b, 32);
+  const __m512i p00 = _mm512_mul_epu32(a, b), p01 = _mm512_mul_epu32(a, bh);
+  const __m512i p10 = _mm512_mul_epu32(ah, b), p11 = _mm512_mul_epu32(ah, bh);
+  const __m512i mid = _mm512_add_epi64(p01, p10);
+  const __mmask8 mid_carry = _mm512_cmplt_epu64_mask(mid, p01);  // worth 2^96
+  lo = _mm512_add_epi64(p00, _mm512_slli_epi64(mid, 32));
+  const __mmask8 lo_carry = _mm512_cmplt_epu64_mask(lo, p00);
+  hi = _mm512_add_epi64(p11, _mm512_srli_epi64(mid, 32));
+  hi = _mm512_mask_add_epi64(hi, lo_carry, hi, splat(1));
+  hi = _mm512_mask_add_epi64(hi, mid_carry, hi, splat(std::uint64_t{1} << 32));
+}
+
+R1_AVX512 __m512i mul(__m512i a, __m512i b) {
+  __m512i lo, hi;
+  product(a, b, lo, hi);
+  return reduce(lo, hi);
+}
+
+R1_AVX512 __m512i add_canonical(__m512i a, __m512i c) {
+  const __m512i s = _mm512_add_epi64(a, c);
+  return _mm512_mask_add_epi64(s, _mm512_cmplt_epu64_mask(s, c), s, splat(gl::EPSILON));
+}
+
+R1_AVX512 void full_round(State& s, std::size_t r) {
+  for (std::size_t h = 0; h < WIDTH; h += 8) {
+    const __m512i x = add_canonical(_mm512_loadu_si512(s.data() + h), _mm512_loadu_si512(kRoundFull.data() + WIDTH * r + h));
+    const __m512i x2 = mul(x, x);
+    _mm512_storeu_si512(s.data() + h, mul(mul(x2, x), mul(x2, x2)));
+  }
+  external(s);
+}
+
+template <std::size_t L>
+R1_AVX512 void partial_round(State* st, std::size_t r) {
+  u64 sum[L];
+  partial_sbox<L>(st, r, sum);
+  for (std::size_t k = 0; k < L; ++k) {
+    const __m512i add = splat(sum[k]);
+    for (std::size_t h = 0; h < WIDTH; h += 8) {
+      __m512i lo, hi;
+      product(_mm512_loadu_si512(kInternalDiag.data() + h), _mm512_loadu_si512(st[k].data() + h), lo, hi);
+      lo = _mm512_add_epi64(lo, add);
+      hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(lo, add), hi, splat(1));
+      _mm512_storeu_si512(st[k].data() + h, reduce(lo, hi));
+    }
+  }
+}
+
+#undef R1_AVX512
+
+}  // namespace avx
+
+template <std::size_t L>
+__attribute__((target("avx512f"))) void permute_avx512(State* st) {
+  for (std::size_t k = 0; k < L; ++k) external(st[k]);
+  for (std::size_t r = 0; r < 4; ++r)
+    for (std::size_t k = 0; k < L; ++k) avx::full_round(st[k], r);
+  for (std::size_t r = 0; r < 16; ++r) avx::partial_round<L>(st, r);
+  for (std::size_t r = 4; r < 8; ++r)
+    for (std::size_t k = 0; k < L; ++k) avx::full_round(st[k], r);
+  for (std::size_t k = 0; k < L; ++k)
+    for (std::size_t i = 0; i < WIDTH; ++i) st[k][i] = gl::canonical(st[k][i]);
+}
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
+bool cpu_has_avx512() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx512f");
+}
+#else
+bool cpu_has_avx512() { return false; }
+#endif
+
 std::atomic<std::uint64_t> g_lane_batches{0};
 std::atomic<bool> g_batching{true};
+const bool g_has_avx512 = cpu_has_avx512();
+std::atomic<bool> g_vector{true};
 
 }  // namespace
 
 template <std::size_t L>
 void permute_lanes(State* st) {
   if constexpr (L > 1) g_lane_batches.fetch_add(1, std::memory_order_relaxed);
+#if R1_HEMERA_AVX512
+  if (g_has_avx512 && g_vector.load(std::memory_order_relaxed)) return permute_avx512<L>(st);
+#endif
   // Inputs may be any 64-bit words: every lazy operation accepts any representative.
   for (std::size_t k = 0; k < L; ++k) external(st[k]);
   for (std::size_t r = 0; r < 4; ++r)
@@ -123,5 +252,9 @@ void permute_many(std::span<State> states) { detail::permute_states(states.data(
 void set_lane_batching(bool on) { detail::g_batching.store(on, std::memory_order_relaxed); }
 
 bool lane_batching() { return detail::g_batching.load(std::memory_order_relaxed); }
+
+void set_vector_rounds(bool on) { detail::g_vector.store(on, std::memory_order_relaxed); }
+
+bool vector_rounds() { return detail::g_has_avx512 && detail::g_vector.load(std::memory_order_relaxed); }
 
 }  // namespace r1::hemera

@@ -342,6 +342,42 @@ RC_GTEST_PROP(Hemera, PermuteManyMatchesScalar, ()) {
   if (states.size() >= 2) RC_ASSERT(hm::detail::lane_batches() > before);  // the lane path ran
 }
 
+// R1-HASH-023: the AVX-512 rounds are the scalar rounds, for one state and in lanes, on any
+// words (edgy ones included: p, p - 1, 2^64 - 1, 0, ...), the batch sizes 1 to 16 and more.
+class VectorRounds {
+ public:
+  explicit VectorRounds(bool on) : was_(hm::vector_rounds()) { hm::set_vector_rounds(on); }
+  ~VectorRounds() { hm::set_vector_rounds(was_); }
+  VectorRounds(const VectorRounds&) = delete;
+  VectorRounds& operator=(const VectorRounds&) = delete;
+
+ private:
+  bool was_;
+};
+
+RC_GTEST_PROP(Hemera, VectorRoundsAreTheScalarRounds, ()) {
+  {
+    VectorRounds on(true);
+    if (!hm::vector_rounds()) RC_SUCCEED("this CPU has no AVX-512: the scalar rounds are the only ones");
+  }
+  const auto count = *rc::gen::inRange<std::size_t>(1, 40);
+  const auto states = *rc::gen::container<std::vector<hm::State>>(count, any_state());
+  std::vector<hm::State> vec = states, scalar = states;
+  {
+    VectorRounds on(true);
+    hm::permute_many(vec);
+    hm::State one = states[0];
+    hm::permute(one);
+    RC_ASSERT(one == vec[0]);
+  }
+  {
+    VectorRounds off(false);
+    RC_ASSERT(!hm::vector_rounds());
+    hm::permute_many(scalar);
+  }
+  RC_ASSERT(vec == scalar);
+}
+
 TEST(Hemera, ZeroSboxInputInLanes) {
   // States whose partial-round S-box input is exactly 0, in chosen lanes of 16-, 8-, 4- and 2-lane
   // groups, among ordinary states; and every lane zero in the same round.

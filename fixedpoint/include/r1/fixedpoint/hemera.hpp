@@ -39,6 +39,10 @@ void permute_many(std::span<State> states);
 // the tree hash) permutes one state at a time. Results are identical either way; process-wide.
 void set_lane_batching(bool on);
 bool lane_batching();
+// The rounds on AVX-512 (eight elements of a state per vector) where the CPU has it, else the
+// scalar rounds. The same values either way; process-wide. vector_rounds(): whether they run.
+void set_vector_rounds(bool on);
+bool vector_rounds();
 
 // Streaming sponge. Domain tags (state[11]): 0 plain, 1 keyed, 2 derive-key context,
 // 3 derive-key material.
