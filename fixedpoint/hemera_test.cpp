@@ -281,17 +281,20 @@ hm::State canonical(hm::State s) {
   return s;
 }
 
-// Turns lane batching on or off for one scope.
-class Batching {
+// Turns a process-wide switch on or off for one scope.
+template <bool (*Get)(), void (*Set)(bool)>
+class Switch {
  public:
-  explicit Batching(bool on) : was_(hm::lane_batching()) { hm::set_lane_batching(on); }
-  ~Batching() { hm::set_lane_batching(was_); }
-  Batching(const Batching&) = delete;
-  Batching& operator=(const Batching&) = delete;
+  explicit Switch(bool on) : was_(Get()) { Set(on); }
+  ~Switch() { Set(was_); }
+  Switch(const Switch&) = delete;
+  Switch& operator=(const Switch&) = delete;
 
  private:
   bool was_;
 };
+using Batching = Switch<hm::lane_batching, hm::set_lane_batching>;
+using VectorRounds = Switch<hm::vector_rounds, hm::set_vector_rounds>;
 
 RC_GTEST_PROP(HemeraLazy, ReduceFoldMulAddAreCongruent, ()) {
   namespace lz = hm::detail::lazy;
@@ -344,16 +347,6 @@ RC_GTEST_PROP(Hemera, PermuteManyMatchesScalar, ()) {
 
 // R1-HASH-023: the AVX-512 rounds are the scalar rounds, for one state and in lanes, on any
 // words (edgy ones included: p, p - 1, 2^64 - 1, 0, ...), the batch sizes 1 to 16 and more.
-class VectorRounds {
- public:
-  explicit VectorRounds(bool on) : was_(hm::vector_rounds()) { hm::set_vector_rounds(on); }
-  ~VectorRounds() { hm::set_vector_rounds(was_); }
-  VectorRounds(const VectorRounds&) = delete;
-  VectorRounds& operator=(const VectorRounds&) = delete;
-
- private:
-  bool was_;
-};
 
 RC_GTEST_PROP(Hemera, VectorRoundsAreTheScalarRounds, ()) {
   {
