@@ -93,10 +93,12 @@ TEST(EpochRun, RerunsAndThreadCountsGiveIdenticalBytes) {
 }
 
 // R1-EPO-005: with the digest formed by the caller, the stages need none of the snapshot's link
-// records (r1 epoch releases them before the spectral stage): the same epoch, byte for byte. The
-// digest is what the option carries: without it the bare snapshot's epoch is another one.
+// records (r1 epoch releases them before the spectral stage): the same epoch, byte for byte, and
+// the caller's digest, not the bare snapshot's own (another one), in it. Two small graphs: the
+// property does not grow with the graph.
 TEST(EpochRun, TheCallersDigestLetsTheLinkRecordsGo) {
   for (const auto& [name, s] : test_graphs()) {
+    if (name != "path300" && name != "grid31x17") continue;
     SCOPED_TRACE(name);
     const auto want = files(epoch(s));
     ASSERT_FALSE(want.empty());
@@ -106,13 +108,11 @@ TEST(EpochRun, TheCallersDigestLetsTheLinkRecordsGo) {
     r1::EpochOptions o;
     o.snapshot_digest = r1::snapshot_digest(s);
     std::vector<r1::Link>().swap(bare.links);
+    EXPECT_FALSE(r1::snapshot_digest(bare) == *o.snapshot_digest);
     auto e = r1::run_epoch(bare, *g, o);
     ASSERT_TRUE(e.is_ok()) << e.status().message();
     EXPECT_TRUE(files(*e) == want);
     EXPECT_TRUE(e->snapshot_digest == *o.snapshot_digest);
-    auto other = r1::run_epoch(bare, *g, {});
-    ASSERT_TRUE(other.is_ok()) << other.status().message();
-    EXPECT_FALSE(other->snapshot_digest == *o.snapshot_digest);
   }
 }
 
