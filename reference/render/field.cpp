@@ -57,23 +57,9 @@ struct Accumulator {
   }
   // A node taken whole (R1-RND-055): its kernel at the centroid, with the colour its spread gives
   // at x (inv2s2 = 1 / (2 sigma^2), so (x - centroid) 2 inv2s2 = (x - centroid) / sigma^2).
-  // The same arithmetic as add(weight, centroid, spread.at(color, (x - centroid) * (2 * inv2s2)),
-  // x, inv2s2), in the same order, written out (the frames' hot path).
   void add_node(double weight, const Vec3& centroid, const Vec3& color, const ColourSpread& spread, const Vec3& x,
                 double inv2s2) {
-    const Vec3 d = centroid - x;
-    const double q = dot(d, d) * inv2s2;
-    ++kernels;
-    const double k = weight * std::exp(-q);
-    const double s2 = 2 * inv2s2;
-    const double u0 = (x.x - centroid.x) * s2, u1 = (x.y - centroid.y) * s2, u2 = (x.z - centroid.z) * s2;
-    const std::array<double, 9>& g = spread.grad;
-    const double r = std::min(std::max(color.x + g[0] * u0 + g[1] * u1 + g[2] * u2, spread.lo.x), spread.hi.x);
-    const double gr = std::min(std::max(color.y + g[3] * u0 + g[4] * u1 + g[5] * u2, spread.lo.y), spread.hi.y);
-    const double b = std::min(std::max(color.z + g[6] * u0 + g[7] * u1 + g[8] * u2, spread.lo.z), spread.hi.z);
-    w += k;
-    c += Vec3{r, gr, b} * k;
-    f += d * k;
+    add(weight, centroid, spread.at(color, (x - centroid) * (2 * inv2s2)), x, inv2s2);
   }
   FieldValue value(double kappa, double sigma) const {
     FieldValue v;

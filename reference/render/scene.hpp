@@ -35,16 +35,15 @@ struct ColourSpread {
     for (int j = 0; j < 3; ++j)
       for (int k = 0; k < 3; ++k) grad[static_cast<std::size_t>(3 * j + k)] += share * c[j] * d[k];
   }
-  // The colour at u = (x - mu) / sigma^2 of a node of mean colour `mean`.
+  // The colour at u = (x - mu) / sigma^2 of a node of mean colour `mean`: per channel j,
+  // mean_j + grad[3 j] u_x + grad[3 j + 1] u_y + grad[3 j + 2] u_z, added left to right, clamped
+  // into [lo_j, hi_j]. Written out per channel: the analytic frames call it for every aggregate at
+  // every sample.
   Vec3 at(const Vec3& mean, const Vec3& u) const {
-    const double m[3] = {mean.x, mean.y, mean.z}, v[3] = {u.x, u.y, u.z}, l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
-    double c[3];
-    for (int j = 0; j < 3; ++j) {
-      double sum = m[j];
-      for (int k = 0; k < 3; ++k) sum += grad[static_cast<std::size_t>(3 * j + k)] * v[k];
-      c[j] = std::min(std::max(sum, l[j]), h[j]);
-    }
-    return {c[0], c[1], c[2]};
+    const auto& g = grad;
+    return {std::min(std::max(mean.x + g[0] * u.x + g[1] * u.y + g[2] * u.z, lo.x), hi.x),
+            std::min(std::max(mean.y + g[3] * u.x + g[4] * u.y + g[5] * u.z, lo.y), hi.y),
+            std::min(std::max(mean.z + g[6] * u.x + g[7] * u.y + g[8] * u.z, lo.z), hi.z)};
   }
 };
 
