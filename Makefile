@@ -1,5 +1,5 @@
 # r1: two commands. `make run` and `make test` install what is missing, build, and run.
-# Build trees: build/ (RelWithDebInfo, g++), build-san/ (clang-14 at -O1: ASan + UBSan for the
+# Build trees: build/ (RelWithDebInfo at -O2 -g1, g++), build-san/ (clang-14 at -O1: ASan + UBSan for the
 # tests and the libFuzzer targets in one tree). ccache serves both when installed (R1_CCACHE).
 # `make test` prints the wall time of each phase (scripts/phase.sh) and a summary at the end.
 JOBS ?= $(shell nproc)
@@ -14,8 +14,11 @@ all: build
 deps:
 	@scripts/install-deps.sh
 
+# -g1: line tables and function names (backtraces, perf, sanitizer-free profiling) without the
+# variables' debug info, which costs a third of every compile (R1-TEST-045); the code is -O2's.
 configure: deps
-	@cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DR1_WERROR=ON $(CMAKE_FLAGS) >/dev/null
+	@cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
+	  -DR1_WERROR=ON $(CMAKE_FLAGS) >/dev/null
 
 build: configure
 	@cmake --build build -j $(JOBS)
@@ -57,26 +60,29 @@ test:
 	@scripts/phase.sh deps scripts/install-deps.sh
 	@scripts/phase.sh layering /usr/bin/python3 scripts/check-layering.py
 	@scripts/phase.sh build $(MAKE) --no-print-directory build
+	@scripts/test-costs.sh seed build main
 	@scripts/phase.sh tests env R1_REQUIRE_VULKAN=1 R1_REQUIRE_BROWSER=1 ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
 	@scripts/phase.sh san-build $(MAKE) --no-print-directory san-build
 	@scripts/phase.sh san-tests $(MAKE) --no-print-directory san-tests
-	@scripts/phase.sh fuzz-smoke scripts/fuzz-smoke.sh $(SAN) $(FUZZ_SECONDS)
+	@scripts/phase.sh fuzz-smoke scripts/fuzz-smoke.sh $(SAN) $(FUZZ_SECONDS) $(JOBS)
 	@echo "make test: passed; phase times:" >&2
 	@scripts/phase-summary.sh
 
 test-fast: layering
 	@$(MAKE) --no-print-directory build
+	@scripts/test-costs.sh seed build main
 	@ctest --test-dir build --output-on-failure -j $(JOBS) -LE slow --timeout 900
 
 # One clang tree for the sanitizers and libFuzzer (R1-TEST-040): ASan + UBSan at -O1 (the tests run
 # several times faster than at -O0 and the sanitizers keep every check), the library
-# coverage-instrumented for the fuzz targets. The `slow` and `install` labels are skipped. The
+# coverage-instrumented for the fuzz targets. The `slow` and `install` labels are skipped (and the
+# slow label's executables not built). The
 # Vulkan device is left out of this tree: Mesa's driver is not built with the sanitizers and its
 # allocations would read as leaks; the main tree runs the Vulkan tests (R1_REQUIRE_VULKAN).
 SAN := build-san
 san-build: deps
 	@cmake -S . -B $(SAN) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
-	  -DCMAKE_CXX_COMPILER=clang++-14 -DR1_SANITIZE=ON -DR1_FUZZ=ON -DR1_BUILD_BENCH=OFF -DR1_WERROR=ON -DR1_BACKEND_VULKAN=OFF \
+	  -DCMAKE_CXX_COMPILER=clang++-14 -DR1_SANITIZE=ON -DR1_FUZZ=ON -DR1_BUILD_BENCH=OFF -DR1_BUILD_SLOW_TESTS=OFF -DR1_WERROR=ON -DR1_BACKEND_VULKAN=OFF \
 	  $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(SAN) -j $(JOBS)
 
@@ -107,6 +113,7 @@ san-build: deps
 #   FocusIteration.Q32AgreesWithF64 and Registry/EveryBackend.*/fp64.
 SAN_EXCLUDE := ^(EpochRun\.RerunsAndThreadCountsGiveIdenticalBytes|EpochRun\.Fp64PositionsAgreeWithQ32WithinTheBound|Backend\.CpuStagesAreTheReferenceBitsAboveTheParallelThreshold|Block/NeuralNetworks\.ApproximatesTheAnalyticFieldOnHeldOutPoints/.*|NeuralField\.AFarViewsFringeFollowsTheAnalyticField|CliGolden\.AnUpdateShowsWhatChanged|NeuralField\.TheLiteralMarchEvaluatesEveryPixelsSamples|CliConform\.TinfCanMeasureTheNeuralField|CliIncremental\.FieldIsUpdatedLocallyWithTheUpdate)$$
 san-tests:
+	@scripts/test-costs.sh seed $(SAN) san
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(SAN) --output-on-failure -j $(JOBS) -LE "slow|install|browser" -E '$(SAN_EXCLUDE)' --timeout 1800
 
@@ -118,7 +125,7 @@ fuzz-build: san-build
 # Every fuzz target runs briefly from its committed corpus (FUZZ_SECONDS each).
 FUZZ_SECONDS ?= 12
 fuzz-smoke: san-build
-	@scripts/fuzz-smoke.sh $(SAN) $(FUZZ_SECONDS)
+	@scripts/fuzz-smoke.sh $(SAN) $(FUZZ_SECONDS) $(JOBS)
 
 # Rewrites the committed golden set from the reference and prints what changed against it
 # (spec/conformance.md R1-CONF-042). Review the printed changes before committing golden/.
