@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <memory>
@@ -13,6 +14,8 @@
 
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/format/hierarchy.hpp"
+#include "r1/reference/epoch_io.hpp"
 #include "r1/reference/hierarchy.hpp"
 
 namespace {
@@ -86,5 +89,46 @@ BENCHMARK(BM_Hierarchy)
     ->ArgNames({"n", "parallel"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
+
+}  // namespace
+
+// The hierarchy of a stored epoch's own layout (R1_BENCH_EPOCH=DIR, an `r1 epoch` directory):
+// spectral layouts are not blobs, and the real 10^6-particle layout is what the stage meets in an
+// epoch. Parallel (R1-HIER-070); the result must be the epoch's hierarchy byte for byte.
+namespace {
+
+void BM_HierarchyOfEpoch(benchmark::State& state, const std::shared_ptr<const r1::Epoch>& e) {
+  r1::HierarchyOptions options;
+  options.parallel = true;
+  const std::string want = r1::hierarchy_bytes(e->hierarchy);
+  for (auto _ : state) {
+    auto h = r1::build_hierarchy(e->frame.position, e->focus.phi, e->encoding.color, e->ids, options);
+    if (!h.is_ok()) {
+      state.SkipWithError(h.status().message().c_str());
+      return;
+    }
+    if (r1::hierarchy_bytes(*h) != want) {
+      state.SkipWithError("the hierarchy differs from the epoch's");
+      return;
+    }
+  }
+  state.counters["particles"] = static_cast<double>(e->ids.size());
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(e->ids.size()));
+}
+
+const bool registered = [] {
+  const char* dir = std::getenv("R1_BENCH_EPOCH");
+  if (dir == nullptr || *dir == '\0') return false;
+  auto e = r1::read_epoch(dir);
+  if (!e.is_ok()) {
+    std::fprintf(stderr, "R1_BENCH_EPOCH: %s\n", e.status().message().c_str());
+    std::exit(2);
+  }
+  auto shared = std::make_shared<const r1::Epoch>(std::move(e).value());
+  benchmark::RegisterBenchmark("BM_HierarchyOfEpoch", BM_HierarchyOfEpoch, shared)
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(1);
+  return true;
+}();
 
 }  // namespace
