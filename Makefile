@@ -14,8 +14,8 @@ all: build
 deps:
 	@scripts/install-deps.sh
 
-# -g1: line tables and function names (backtraces, perf, sanitizer-free profiling) without the
-# variables' debug info, which costs a third of every compile (R1-TEST-045); the code is -O2's.
+# -g1: line tables and function names (backtraces, perf) without the
+# variables' debug info, which costs a quarter to a third of each compile (R1-TEST-045); the code is -O2's.
 configure: deps
 	@cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
 	  -DR1_WERROR=ON $(CMAKE_FLAGS) >/dev/null
