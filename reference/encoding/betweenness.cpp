@@ -534,10 +534,8 @@ std::vector<std::uint32_t> choose_pivots(std::span<const ParticleId> ids, std::u
   return idx;
 }
 
-Betweenness betweenness(const Graph& g, std::span<const ParticleId> ids, const BetweennessOptions& options,
-                        const ProgressFn& progress, const BetweennessRun& run) {
-  const std::uint32_t n = g.n;
-  const u128 per_source = static_cast<u128>(n) + g.nnz();
+std::uint32_t betweenness_sources(std::uint32_t n, std::uint64_t nnz, const BetweennessOptions& options) {
+  const u128 per_source = static_cast<u128>(n) + nnz;
   std::uint32_t k = n;  // n means exact
   if (options.pivots) {
     if (*options.pivots != 0 && *options.pivots < n) k = *options.pivots;
@@ -546,6 +544,13 @@ Betweenness betweenness(const Graph& g, std::span<const ParticleId> ids, const B
     const u128 want = std::max<u128>(options.min_pivots, by_budget);
     if (want < n) k = static_cast<std::uint32_t>(want);
   }
+  return k;
+}
+
+Betweenness betweenness(const Graph& g, std::span<const ParticleId> ids, const BetweennessOptions& options,
+                        const ProgressFn& progress, const BetweennessRun& run) {
+  const std::uint32_t n = g.n;
+  const std::uint32_t k = betweenness_sources(n, g.nnz(), options);
   Betweenness b;
   b.sources = k;
   b.exact = k >= n;

@@ -78,6 +78,9 @@ std::vector<std::uint32_t> choose_pivots(std::span<const ParticleId> ids, std::u
 // scale = 0.5 with every particle a source gives b exactly.
 std::vector<double> betweenness_from_sources(const Graph& g, std::span<const std::uint32_t> sources, double scale,
                                              const ProgressFn& progress = {}, const BetweennessRun& run = {});
+// The sources R1-ENC-014 gives a graph of n particles and nnz stored entries: n (exact), or the
+// number of hashed pivots.
+std::uint32_t betweenness_sources(std::uint32_t n, std::uint64_t nnz, const BetweennessOptions& options = {});
 // Exact or pivot-estimated betweenness by the rule of R1-ENC-014.
 Betweenness betweenness(const Graph& g, std::span<const ParticleId> ids, const BetweennessOptions& options = {},
                         const ProgressFn& progress = {}, const BetweennessRun& run = {});
