@@ -103,6 +103,23 @@ struct Scratch {
   std::vector<std::uint64_t> qbits, wbits;
 };
 
+// A run of `count` consecutive panel columns from `col`, list entries (or terms) at .. at + count - 1.
+struct TermRun {
+  std::size_t at = 0, col = 0, count = 0;
+};
+
+std::vector<TermRun> term_runs(Cols terms) {
+  std::vector<TermRun> runs;
+  for (std::size_t t = 0; t < terms.size(); ++t) {
+    if (!runs.empty() && terms[t] == runs.back().col + runs.back().count) {
+      ++runs.back().count;
+    } else {
+      runs.push_back(TermRun{t, terms[t], 1});
+    }
+  }
+  return runs;
+}
+
 // ---- AVX-512 IFMA inner products ---------------------------------------------------------------
 //
 // Row-major, no transposition: each tile's list entries are copied compact (one contiguous run
@@ -115,7 +132,7 @@ constexpr std::size_t kMaxGroup = 8;  // block columns per pass over the chunk: 
 
 struct IfmaDots {
   std::size_t nq = 0, nq_pad = 0, nw = 0;
-  bool run = false;                   // qs is a run of consecutive columns
+  std::vector<TermRun> runs;          // qs as runs of consecutive columns
   std::vector<std::int64_t> xt;       // the tile's list entries, row-major (kTile x nq_pad)
   std::vector<std::uint64_t> wt;      // chunk rows x nw: w + 2^51
   std::vector<std::uint64_t> lo, hi;  // [c * nq_pad + q]: the pair's lane sums
@@ -167,20 +184,25 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t r
 R1_MASKED_SHIFT_WARNING_ON
 
 // Tiles of kTile rows (about 100 KB of the widest panels, kept in L2 while every group of list
-// columns passes over them), the accumulators carried in memory between tiles.
-void ifma_dots_chunk(const Panel<fx::Q32>& p, Cols qs, std::size_t r0, std::size_t rows, IfmaDots& d) {
+// columns passes over them), the accumulators carried in memory between tiles. A tile's list
+// entries are copied compact, a run of columns at a time (the solver's lists are the trivial and
+// locked columns, then one run of basis columns), and its rows' block-column entries are
+// offset beside them while those rows are in the cache.
+void ifma_dots_chunk(const Panel<fx::Q32>& p, Cols ws, std::size_t r0, std::size_t rows, IfmaDots& d) {
   d.xt.resize(kTile * d.nq_pad);
   for (std::size_t t0 = 0; t0 < rows; t0 += kTile) {
     const std::size_t tr = std::min(kTile, rows - t0);
-    // The tile's list entries copied compact: one contiguous run per row when the list is a run
-    // of columns (sequential reads of the panel), else entry by entry.
     for (std::size_t r = 0; r < tr; ++r) {
       const fx::Q32* row = p.row(r0 + t0 + r);
       std::int64_t* dst = d.xt.data() + r * d.nq_pad;
-      if (d.run) {
-        std::memcpy(dst, &row[qs[0]].raw, d.nq * sizeof(std::int64_t));
-      } else {
-        for (std::size_t q = 0; q < d.nq; ++q) dst[q] = row[qs[q]].raw;
+      for (const TermRun& run : d.runs) std::memcpy(dst + run.at, &row[run.col].raw, run.count * sizeof(std::int64_t));
+      std::uint64_t* wr = d.wt.data() + (t0 + r) * d.nw;
+      for (std::size_t c = 0; c < d.nw; ++c) {
+        const std::int64_t v = row[ws[c]].raw;
+        const std::uint64_t o = static_cast<std::uint64_t>(v) + kOffset;  // wraps only when the bits refuse it
+        wr[c] = o;
+        d.wsum[c] += o;  // below 2048 2^52 = 2^63 whenever the bits allow the pair
+        d.wbits[c] |= spectral::magnitude_bits(v);
       }
     }
     const std::size_t wr = t0 * d.nw;  // the tile's first row of the block columns' entries
@@ -255,6 +277,7 @@ u128 avx2_total(const std::uint64_t* l) {
 // true total is below 2^125 + 2^123 in magnitude, so its i128 reading is exact, and the rounding
 // is the portable kernel's.
 constexpr std::size_t kMaxIfmaTerms = 2047;
+constexpr std::size_t kCombineRows = 4;  // rows a combination takes together
 
 struct CombinePlan {
   std::size_t no = 0, nt = 0, no_pad = 0;
@@ -263,30 +286,35 @@ struct CombinePlan {
   std::vector<std::int64_t> coef;     // the multiples of 2^-60 [t * no + o], for the exact scalar rows
 };
 
-// One row, outputs og .. og + 8 V - 1: a lane per output, each term's offset entry broadcast.
-// sums[k * no_pad + o] receives L0, H0, L1, H1 (k = 0..3).
-template <std::size_t V>
-__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_outputs(const CombinePlan& plan, const std::uint64_t* xo,
-                                                                           std::size_t og, std::uint64_t* sums) {
-  __m512i l0[V], h0[V], l1[V], h1[V];
-  for (std::size_t v = 0; v < V; ++v) l0[v] = h0[v] = l1[v] = h1[v] = _mm512_setzero_si512();
+// R rows, outputs og .. og + 7: a lane per output, each row's offset term entry broadcast against
+// the term's coefficients, which are loaded once for the R rows (a thick restart's coefficients
+// are 200 KB, far beyond the first-level cache). sums[r][k * no_pad + o] receives row r's L0, H0,
+// L1, H1 (k = 0..3).
+template <std::size_t R>
+__attribute__((target("avx512f,avx512ifma"))) void ifma_combine_rows(const CombinePlan& plan,
+                                                                        const std::uint64_t* const* xo, std::size_t og,
+                                                                        std::uint64_t* const* sums) {
+  __m512i l0[R], h0[R], l1[R], h1[R];
+  for (std::size_t r = 0; r < R; ++r) l0[r] = h0[r] = l1[r] = h1[r] = _mm512_setzero_si512();
   const std::uint64_t* a = plan.c0.data() + og;
   const std::uint64_t* b = plan.c1.data() + og;
   for (std::size_t t = 0; t < plan.nt; ++t, a += plan.no_pad, b += plan.no_pad) {
-    const __m512i x = _mm512_set1_epi64(static_cast<long long>(xo[t]));
-    for (std::size_t v = 0; v < V; ++v) {
-      const __m512i ca = _mm512_loadu_si512(a + 8 * v), cb = _mm512_loadu_si512(b + 8 * v);
-      l0[v] = _mm512_madd52lo_epu64(l0[v], x, ca);
-      h0[v] = _mm512_madd52hi_epu64(h0[v], x, ca);
-      l1[v] = _mm512_madd52lo_epu64(l1[v], x, cb);
-      h1[v] = _mm512_madd52hi_epu64(h1[v], x, cb);
+    const __m512i ca = _mm512_loadu_si512(a), cb = _mm512_loadu_si512(b);
+#pragma GCC unroll 8  // the accumulators stay in registers only when the rows are unrolled
+    for (std::size_t r = 0; r < R; ++r) {
+      const __m512i x = _mm512_set1_epi64(static_cast<long long>(xo[r][t]));
+      l0[r] = _mm512_madd52lo_epu64(l0[r], x, ca);
+      h0[r] = _mm512_madd52hi_epu64(h0[r], x, ca);
+      l1[r] = _mm512_madd52lo_epu64(l1[r], x, cb);
+      h1[r] = _mm512_madd52hi_epu64(h1[r], x, cb);
     }
   }
-  for (std::size_t v = 0; v < V; ++v) {
-    _mm512_storeu_si512(sums + og + 8 * v, l0[v]);
-    _mm512_storeu_si512(sums + plan.no_pad + og + 8 * v, h0[v]);
-    _mm512_storeu_si512(sums + 2 * plan.no_pad + og + 8 * v, l1[v]);
-    _mm512_storeu_si512(sums + 3 * plan.no_pad + og + 8 * v, h1[v]);
+  const std::size_t np = plan.no_pad;
+  for (std::size_t r = 0; r < R; ++r) {
+    _mm512_storeu_si512(sums[r] + og, l0[r]);
+    _mm512_storeu_si512(sums[r] + np + og, h0[r]);
+    _mm512_storeu_si512(sums[r] + 2 * np + og, l1[r]);
+    _mm512_storeu_si512(sums[r] + 3 * np + og, h1[r]);
   }
 }
 
@@ -315,12 +343,6 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::in
   }
 }
 R1_MASKED_SHIFT_WARNING_ON
-
-void ifma_combine_row(const CombinePlan& plan, const std::uint64_t* xo, std::uint64_t* sums) {
-  std::size_t og = 0;
-  for (; og + 16 <= plan.no_pad; og += 16) ifma_combine_outputs<2>(plan, xo, og, sums);
-  for (; og < plan.no_pad; og += 8) ifma_combine_outputs<1>(plan, xo, og, sums);
-}
 
 // Columns `cols` of rows t0 .. t0 + rows - 1, offset by 2^51,  and split into the high and the low
 // 26 bits, into a column-major tile (two kTile runs per column), adding each column's raw
@@ -417,28 +439,17 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
   d.nq = nq;
   d.nw = nw;
   d.nq_pad = (nq + 7) / 8 * 8;
-  d.run = true;
-  for (std::size_t q = 1; q < nq; ++q) d.run = d.run && qs[q] == qs[0] + q;
+  d.runs = term_runs(qs);
   for (std::size_t r0 = lo; r0 < hi; r0 += kChunk) {
     const std::size_t rows = std::min(kChunk, hi - r0);
     d.wt.resize(rows * nw);
     d.wsum.assign(nw, 0);
     d.wbits.assign(nw, 0);
-    for (std::size_t r = 0; r < rows; ++r) {
-      const fx::Q32* row = p.row(r0 + r);
-      for (std::size_t c = 0; c < nw; ++c) {
-        const std::int64_t v = row[ws[c]].raw;
-        const std::uint64_t o = static_cast<std::uint64_t>(v) + kOffset;  // wraps only when the bits refuse it
-        d.wt[r * nw + c] = o;
-        d.wsum[c] += o;  // below 2048 2^52 = 2^63 whenever the bits allow the pair
-        d.wbits[c] |= spectral::magnitude_bits(v);
-      }
-    }
     d.lo.assign(nw * d.nq_pad, 0);
     d.hi.assign(nw * d.nq_pad, 0);
     d.xsum.assign(d.nq_pad, 0);
     d.xbits.assign(d.nq_pad, 0);
-    ifma_dots_chunk(p, qs, r0, rows, d);
+    ifma_dots_chunk(p, ws, r0, rows, d);
     // sum x w = sum x' w' - 2^51 (sum x' + sum w') + rows 2^102, formed modulo 2^128: the true
     // value is below 2^11 2^102 in magnitude, so its i128 reading is exact.
     const u128 rows_kk = static_cast<u128>(rows) << 102;
@@ -498,47 +509,81 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
     }
   const u128 nt_ck = static_cast<u128>(nt) << 114;
   const i128 one = i128{1} << 60;
-  bool run = true;
-  for (std::size_t t = 1; t < nt; ++t) run = run && terms[t] == terms[0] + t;
+  // The terms as runs of consecutive columns (a pass's terms are two: the block, then the list),
+  // each offset 8 entries at a time; a list of scattered columns is many runs of one.
+  const std::vector<TermRun> runs = term_runs(terms);
   spectral::for_row_blocks(size(), parallel(), [&](std::size_t lo, std::size_t hi) {
-    std::vector<std::uint64_t> xo(nt), sums(4 * plan.no_pad);
+    std::vector<std::uint64_t> xo(kCombineRows * nt), sums(kCombineRows * 4 * plan.no_pad);
+    std::uint64_t xsum[kCombineRows], bits[kCombineRows];
+    const std::uint64_t* xr[kCombineRows];
+    std::uint64_t* sr[kCombineRows];
+    for (std::size_t r = 0; r < kCombineRows; ++r) {
+      xr[r] = xo.data() + r * nt;
+      sr[r] = sums.data() + r * 4 * plan.no_pad;
+    }
     std::vector<std::int64_t> result(no);
-    for (std::size_t i = lo; i < hi; ++i) {
-      fx::Q32* row = p.row(i);
-      std::uint64_t xsum = 0, bits = 0;  // the sum is below nt 2^52 < 2^63 whenever the bits allow the row
-      if (run) {
-        ifma_offset_run(&row[terms[0]].raw, nt, xo.data(), xsum, bits);
-      } else {
-        for (std::size_t t = 0; t < nt; ++t) {
-          const std::int64_t v = row[terms[t]].raw;
-          xo[t] = static_cast<std::uint64_t>(v) + kOffset;
-          xsum += xo[t];
-          bits |= spectral::magnitude_bits(v);
+    const std::size_t row_bytes = p.cols() * sizeof(fx::Q32);
+    for (std::size_t i0 = lo; i0 < hi; i0 += kCombineRows) {
+      const std::size_t rows = std::min(kCombineRows, hi - i0);
+      // The next rows on their way to the cache while these are combined.
+      for (std::size_t i = i0 + kCombineRows; i < std::min(hi, i0 + 2 * kCombineRows); ++i) {
+        const char* ahead = reinterpret_cast<const char*>(p.row(i));
+        for (std::size_t b = 0; b < row_bytes + 63; b += 64) _mm_prefetch(ahead + b, _MM_HINT_T0);
+      }
+      // Each row's terms offset by 2^51, their sum (below nt 2^52 < 2^63 whenever the bits allow
+      // the row) and the OR of their magnitude bits.
+      for (std::size_t r = 0; r < rows; ++r) {
+        const fx::Q32* row = p.row(i0 + r);
+        std::uint64_t* x = xo.data() + r * nt;
+        xsum[r] = bits[r] = 0;
+        for (const TermRun& run : runs) {
+          if (run.count >= 4) {
+            std::uint64_t sum = 0, b = 0;
+            ifma_offset_run(&row[run.col].raw, run.count, x + run.at, sum, b);
+            xsum[r] += sum;
+            bits[r] |= b;
+          } else {
+            for (std::size_t t = 0; t < run.count; ++t) {
+              const std::int64_t v = row[run.col + t].raw;
+              x[run.at + t] = static_cast<std::uint64_t>(v) + kOffset;
+              xsum[r] += x[run.at + t];
+              bits[r] |= spectral::magnitude_bits(v);
+            }
+          }
         }
       }
-      if ((bits >> kOffsetBits) != 0) {  // an entry beyond the offset range: the exact scalar sum
-        for (std::size_t o = 0; o < no; ++o) {
-          FastExact acc;
-          if (!bases.empty()) acc.add(static_cast<i128>(row[bases[o]].raw) * one);
-          for (std::size_t t = 0; t < nt; ++t) acc.add(static_cast<i128>(plan.coef[t * no + o]) * row[terms[t]].raw);
-          result[o] = acc.round_shift(60);
+      for (std::size_t og = 0; og < plan.no_pad; og += 8) {
+        if (rows == kCombineRows) {
+          ifma_combine_rows<kCombineRows>(plan, xr, og, sr);
+        } else {
+          for (std::size_t r = 0; r < rows; ++r) ifma_combine_rows<1>(plan, xr + r, og, sr + r);
         }
-      } else {
-        ifma_combine_row(plan, xo.data(), sums.data());
-        const u128 xs = static_cast<u128>(xsum) << 63;
-        for (std::size_t o = 0; o < no; ++o) {
-          const std::uint64_t* l = sums.data() + o;
+      }
+      for (std::size_t r = 0; r < rows; ++r) {
+        fx::Q32* row = p.row(i0 + r);
+        if ((bits[r] >> kOffsetBits) != 0) {  // an entry beyond the offset range: the exact scalar sum
+          for (std::size_t o = 0; o < no; ++o) {
+            FastExact acc;
+            if (!bases.empty()) acc.add(static_cast<i128>(row[bases[o]].raw) * one);
+            for (std::size_t t = 0; t < nt; ++t) acc.add(static_cast<i128>(plan.coef[t * no + o]) * row[terms[t]].raw);
+            result[o] = acc.round_shift(60);
+          }
+        } else {
+          const u128 xs = static_cast<u128>(xsum[r]) << 63;
           const std::size_t np = plan.no_pad;
-          const u128 cx = static_cast<u128>(l[0]) + ((static_cast<u128>(l[np]) + l[2 * np]) << 52) +
-                          (static_cast<u128>(l[3 * np]) << 104);
-          const i128 base = bases.empty() ? 0 : static_cast<i128>(row[bases[o]].raw) * one;
-          const u128 total = cx - (plan.csum[o] << kOffsetBits) - xs + nt_ck + static_cast<u128>(base);
-          const i128 r = fx::detail::rne_shift(static_cast<i128>(total), 60);
-          if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
-          result[o] = static_cast<std::int64_t>(r);
+          for (std::size_t o = 0; o < no; ++o) {
+            const std::uint64_t* l = sr[r] + o;
+            const u128 cx = static_cast<u128>(l[0]) + ((static_cast<u128>(l[np]) + l[2 * np]) << 52) +
+                            (static_cast<u128>(l[3 * np]) << 104);
+            const i128 base = bases.empty() ? 0 : static_cast<i128>(row[bases[o]].raw) * one;
+            const u128 total = cx - (plan.csum[o] << kOffsetBits) - xs + nt_ck + static_cast<u128>(base);
+            const i128 rr = fx::detail::rne_shift(static_cast<i128>(total), 60);
+            if (!fx::detail::fits_i64(rr)) fx::detail::throw_overflow("spectral round");
+            result[o] = static_cast<std::int64_t>(rr);
+          }
         }
+        for (std::size_t o = 0; o < no; ++o) row[outs[o]] = fx::Q32::from_raw(result[o]);
       }
-      for (std::size_t o = 0; o < no; ++o) row[outs[o]] = fx::Q32::from_raw(result[o]);
     }
   });
 }

@@ -92,10 +92,16 @@ TEST(CpuPanelKernels, EveryLevelGivesThePortableCombinationsBitForBit) {
     std::iota(many.begin(), many.end(), 7u);
     std::vector<std::uint32_t> seventy(70);
     std::iota(seventy.begin(), seventy.end(), 0u);
+    // A fused pass as the solver makes it: the block's own columns, then the list (a long run
+    // through a column beyond the vector range), then list columns in short runs.
+    std::vector<std::uint32_t> block = {190, 191, 192, 193, 194, 195, 196}, pass = block;
+    for (std::uint32_t c = 0; c < 150; ++c) pass.push_back(c);
+    for (const std::uint32_t c : {160u, 162u, 163u, 164u, 170u, 171u, 172u, 173u, 174u}) pass.push_back(c);
     const std::vector<Case> cases = {
         {{0, 1, 2, 3, 4, 5, 6}, {0, 1, 2, 3, 4, 5, 6}, {7, 8, 9, 10, 11, 12, 13, 14, 15, 16}},  // a Gram-Schmidt pass
         {{190, 191, 192}, {}, {0, 1, 2, 3, 4}},                                                  // no bases
         {seventy, {}, many},                                                                     // a thick restart
+        {block, {}, pass},                                                                       // a fused pass's runs
         {{7}, {7}, {3}},                                                                         // one term, in range
         {{8}, {8}, {5, 4}},                                                                      // a term beyond it
         {{9, 10}, {11, 12}, {9, 10, 5}},                                                         // outputs are terms

@@ -1,0 +1,144 @@
+// The spectral solver's vector kernels on panels shaped as the canonical solver's (R1-SPEC-021:
+// b = 7, m = 189, 1 + 5 trivial and locked columns, a continuation and a scratch block: 209
+// columns), at one SIMD level of the cpu backend or the portable kernels, on two cores:
+//   * Dots: one fused pass's inner products, C = list^T W and G = W^T W (R1-SPEC-023), the list
+//     `list` columns long (the trivial, the locked and the basis so far);
+//   * Combine: the pass's combination W <- W X - list (C X);
+//   * Pass: the two together, as a pass runs them (two sweeps over the panel);
+//   * Ritz: the restart's combination of 70 Ritz vectors from the 189 basis columns (R1-SPEC-025).
+// Entries are random multiples of 2^-48 of magnitude below 2^3, as unit basis vectors' are
+// (R1-SPEC-011). Generation is outside the timed loop. Arguments: rows, list length, SIMD level
+// (0 portable, 1 avx2, 2 avx512ifma); levels this CPU lacks are skipped with the reason.
+#include <benchmark/benchmark.h>
+
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+#include "r1/accel/cpu/panel_kernels.hpp"
+#include "r1/fixedpoint/counter_rng.hpp"
+
+namespace {
+
+using r1::accel::cpu::Simd;
+using r1::spectral::Panel;
+
+constexpr std::uint32_t kCols = 209, kW0 = 195, kBlock = 7;
+
+const Panel<r1::fx::Q32>& panel(std::size_t n) {
+  static std::size_t made = 0;
+  static Panel<r1::fx::Q32> p;
+  if (made != n) {
+    p = Panel<r1::fx::Q32>(n, kCols);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::uint32_t c = 0; c < kCols; ++c)
+        p.at(i, c) = r1::fx::Q32::from_raw(static_cast<std::int64_t>(r1::rng::bits(0xbe7c, i, c) >> 13) - (std::int64_t{1} << 50));
+    made = n;
+  }
+  return p;
+}
+
+std::vector<std::uint32_t> run(std::uint32_t first, std::size_t count) {
+  std::vector<std::uint32_t> v(count);
+  std::iota(v.begin(), v.end(), first);
+  return v;
+}
+
+// A step's list (R1-SPEC-022): the trivial column, the five locked slots in the order of their
+// eigenvalues, then the basis so far: `count` columns.
+std::vector<std::uint32_t> step_list(std::size_t count) {
+  std::vector<std::uint32_t> v = {0, 3, 1, 2, 5, 4};
+  const std::vector<std::uint32_t> basis = run(6, count - v.size());
+  v.insert(v.end(), basis.begin(), basis.end());
+  return v;
+}
+
+std::vector<double> coefficients(std::size_t count) {
+  std::vector<double> c(count);
+  for (std::size_t k = 0; k < count; ++k) c[k] = r1::rng::uniform_double(0xc0ef, k, 0) - 0.5;
+  return c;
+}
+
+bool setup(benchmark::State& state, Simd& level) {
+  level = static_cast<Simd>(state.range(2));
+  if (static_cast<int>(level) > static_cast<int>(r1::accel::cpu::detect_simd())) {
+    state.SkipWithError("this CPU does not run this SIMD level");
+    return false;
+  }
+  state.SetLabel(std::string(r1::accel::cpu::simd_name(level)));
+  return true;
+}
+
+// n rows; e and frac as the solver sets them for n (R1-SPEC-011).
+std::unique_ptr<r1::spectral::PanelOps<r1::fx::Q32>> kernels(std::size_t n, Simd level) {
+  int e = 0;
+  while ((std::size_t{1} << e) < n) ++e;
+  return r1::accel::cpu::make_panel_kernels(n, e, true, 48, level);
+}
+
+void BM_Dots(benchmark::State& state) {
+  Simd level;
+  if (!setup(state, level)) return;
+  const std::size_t n = static_cast<std::size_t>(state.range(0)), nl = static_cast<std::size_t>(state.range(1));
+  const Panel<r1::fx::Q32>& p = panel(n);
+  const auto ops = kernels(n, level);
+  std::vector<std::uint32_t> qs = step_list(nl);
+  const std::vector<std::uint32_t> w = run(kW0, kBlock);
+  qs.insert(qs.end(), w.begin(), w.end());
+  std::vector<double> out(qs.size() * kBlock);
+  for (auto _ : state) {
+    ops->dots(p, qs, w, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+
+void BM_Combine(benchmark::State& state) {
+  Simd level;
+  if (!setup(state, level)) return;
+  const std::size_t n = static_cast<std::size_t>(state.range(0)), nl = static_cast<std::size_t>(state.range(1));
+  Panel<r1::fx::Q32> p = panel(n);
+  const auto ops = kernels(n, level);
+  const std::vector<std::uint32_t> w = run(kW0, kBlock);
+  std::vector<std::uint32_t> terms = w;
+  const std::vector<std::uint32_t> list = step_list(nl);
+  terms.insert(terms.end(), list.begin(), list.end());
+  const std::vector<double> coef = coefficients(terms.size() * kBlock);
+  const Panel<r1::fx::Q32>& fresh = panel(n);
+  for (auto _ : state) {
+    ops->combine(p, w, {}, terms, coef);
+    state.PauseTiming();
+    for (std::size_t i = 0; i < n; ++i)  // the block's entries back to their magnitude
+      for (const std::uint32_t c : w) p.at(i, c) = fresh.at(i, c);
+    state.ResumeTiming();
+  }
+}
+
+void BM_Ritz(benchmark::State& state) {
+  Simd level;
+  if (!setup(state, level)) return;
+  const std::size_t n = static_cast<std::size_t>(state.range(0));
+  Panel<r1::fx::Q32> p = panel(n);
+  const auto ops = kernels(n, level);
+  const std::vector<std::uint32_t> basis = run(6, 189), ritz = run(6, 70);
+  std::vector<double> coef = coefficients(189 * 70);
+  for (double& c : coef) c *= 0.1;  // an orthogonal matrix's rows: entries well below 1
+  for (auto _ : state) {
+    ops->combine(p, ritz, {}, basis, coef);
+    state.PauseTiming();
+    p = panel(n);
+    state.ResumeTiming();
+  }
+}
+
+// rows x list length x SIMD level; the list lengths are a cycle's first and last steps.
+void step_args(benchmark::internal::Benchmark* b) {
+  for (const long n : {100000L, 1000000L})
+    for (const long nl : {83L, 195L})
+      for (const long level : {0L, 1L, 2L}) b->Args({n, nl, level});
+}
+
+BENCHMARK(BM_Dots)->Apply(step_args)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Combine)->Apply(step_args)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Ritz)->ArgsProduct({{100000L, 1000000L}, {189L}, {0L, 2L}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+}  // namespace
