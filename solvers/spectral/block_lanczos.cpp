@@ -15,20 +15,31 @@
 
 namespace r1::spectral {
 
+// The compact copies a block application reads and writes, kept across applications: a fresh
+// pair per application is n x b entries each (112 MB at 10^6 particles), whose pages the
+// kernel would map and clear again every time.
+template <class Scalar>
+struct CompactBlocks {
+  std::vector<Scalar> x, y;
+};
+
 // Columns dst.. <- L~ columns src.. (count of each, dst and src runs disjoint). The operator
 // gathers a row of the source block per stored entry: from a compact n x count copy those rows
 // are 8 count bytes apart instead of a whole panel row, which keeps large graphs in cache. The
-// values are those of apply_block on the panel itself.
+// values are those of apply_block on the panel itself (which writes every entry of y).
 template <class Scalar>
 void apply_compact(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, std::uint32_t src,
-                   std::uint32_t dst, std::size_t count) {
+                   std::uint32_t dst, std::size_t count, CompactBlocks<Scalar>& buf) {
   const std::size_t n = p.rows();
-  std::vector<Scalar> x(n * count), y(n * count);
+  buf.x.resize(n * count);
+  buf.y.resize(n * count);
+  Scalar* x = buf.x.data();
+  Scalar* y = buf.y.data();
   for_row_blocks(n, ops.parallel(), [&](std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i)
       for (std::size_t c = 0; c < count; ++c) x[i * count + c] = p.at(i, src + c);
   });
-  op.apply_block(x.data(), count, y.data(), count, count, ops.parallel());
+  op.apply_block(x, count, y, count, count, ops.parallel());
   for_row_blocks(n, ops.parallel(), [&](std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i)
       for (std::size_t c = 0; c < count; ++c) p.at(i, dst + c) = y[i * count + c];
@@ -37,11 +48,11 @@ void apply_compact(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& o
 
 template <class Scalar>
 void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, Cols xs, Cols ys,
-                    std::uint32_t trivial, std::span<double> lambda, std::span<double> residual) {
+                    std::uint32_t trivial, std::span<double> lambda, std::span<double> residual, CompactBlocks<Scalar>& buf) {
   const std::size_t k = xs.size();
   for (std::size_t c = 0; c < k; ++c)
     if (xs[c] != xs[0] + c || ys[c] != ys[0] + c) throw std::invalid_argument("rayleigh_block: columns must be runs");
-  apply_compact(op, ops, p, xs[0], ys[0], k);
+  apply_compact(op, ops, p, xs[0], ys[0], k, buf);
   for (std::size_t c = 0; c < k; ++c) {
     const double xx = ops.dot(p, xs[c], xs[c]), xy = ops.dot(p, xs[c], ys[c]);
     lambda[c] = xy / xx;
@@ -54,6 +65,13 @@ void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& 
     ops.combine(p, out, out, t_col, t_coef);
     residual[c] = std::sqrt(ops.dot(p, ys[c], ys[c]) / xx);
   }
+}
+
+template <class Scalar>
+void rayleigh_block(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, Cols xs, Cols ys,
+                    std::uint32_t trivial, std::span<double> lambda, std::span<double> residual) {
+  CompactBlocks<Scalar> buf;
+  rayleigh_block(op, ops, p, xs, ys, trivial, lambda, residual, buf);
 }
 
 namespace {
@@ -167,7 +185,7 @@ class Solver {
   }
 
   void apply(Col src, Col dst, std::size_t count) {
-    apply_compact(op_, ops_, p_, src, dst, count);
+    apply_compact(op_, ops_, p_, src, dst, count, compact_);
     matvecs_ += static_cast<std::uint32_t>(count);
     ++passes_;
   }
@@ -210,6 +228,7 @@ class Solver {
   std::vector<Col> free_slots_;
   std::uint64_t next_dim_ = 0;
   std::uint32_t matvecs_ = 0, passes_ = 0, robust_blocks_ = 0;
+  CompactBlocks<Scalar> compact_;
 };
 
 // The new block W = L V_s in columns w0.. (b of them) <- an orthonormal block V_(s+1), with
@@ -427,7 +446,7 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
       while (len < b_ && nl + len < kk && estimate[nl + len] <= tol) ++len;
       if (len == 0) break;
       std::vector<double> lam(len), res(len);
-      rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(nl), len), col_run(scratch_, len), 0, lam, res);
+      rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(nl), len), col_run(scratch_, len), 0, lam, res, compact_);
       matvecs_ += static_cast<std::uint32_t>(len);
       ++passes_;
       for (std::size_t i = 0; i < len; ++i) {
@@ -453,7 +472,7 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
       for (std::size_t i = nl; i < kk; i += b_) {
         const std::size_t len = std::min(b_, kk - i);
         std::vector<double> lam(len), res(len);
-        rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(i), len), col_run(scratch_, len), 0, lam, res);
+        rayleigh_block(op_, ops_, p_, col_run(base_ + static_cast<Col>(i), len), col_run(scratch_, len), 0, lam, res, compact_);
         matvecs_ += static_cast<std::uint32_t>(len);
         ++passes_;
         for (std::size_t j = 0; j < len; ++j) offer(base_ + static_cast<Col>(i + j), lam[j], res[j]);
