@@ -18,11 +18,12 @@ std::unique_ptr<Backend> make_cpu_backend() {
   if (!error.empty()) throw std::invalid_argument(error);
   std::string summary = "spectral on accel/cpu kernels (TBB, exact SIMD ";
   summary += accel::cpu::simd_name(level);
-  summary += level == accel::cpu::Simd::kAvx512Ifma ? " dots and combinations" : level == accel::cpu::Simd::kAvx2 ? " dots" : " none";
+  summary += level == accel::cpu::Simd::kAvx512Ifma ? " dots, combinations and operator rows" : level == accel::cpu::Simd::kAvx2 ? " dots" : " none";
   summary += "), focus on TBB row loops, encoding's batched betweenness and hierarchy with their TBB switches; "
              "frame and render the reference's (same bits)";
   StageKernels kernels;
   kernels.panel = accel::cpu::kernel_factory(level);
+  kernels.rows = accel::cpu::rows_factory(level, true);
   return std::make_unique<StageBackend>("cpu", summary, ReferenceStages(true, false, std::move(kernels)),
                                         Domain::kFixedQ32);
 }

@@ -468,6 +468,7 @@ std::unique_ptr<Backend> make_vulkan_backend() {
     const accel::cpu::Simd level = accel::cpu::chosen_simd(&error);
     if (!error.empty()) throw std::invalid_argument(error);
     kernels.panel = accel::cpu::kernel_factory(level);
+    kernels.rows = accel::cpu::rows_factory(level, true);
     epoch = "the spectral stage the cpu backend's on the host";
 #else
     epoch = "the spectral stage the reference's with its TBB switch, on the host";

@@ -34,4 +34,10 @@ std::unique_ptr<spectral::PanelOps<fx::Q32>> make_panel_kernels(std::size_t n, i
 // The factory the solver takes (SpectralOptions::q32_kernels) for `level`.
 Q32KernelFactory kernel_factory(Simd level);
 
+// The operator's rows the solver takes (SpectralOptions::q32_rows, R1-SPEC-073) for `level`:
+// with AVX-512 IFMA, a block application's exact row sums vectorised over the block's columns
+// (block_rows.cpp), on TBB tasks when `parallel`; below IFMA none (an empty factory: the
+// solver's own rows run).
+Q32RowsFactory rows_factory(Simd level, bool parallel);
+
 }  // namespace r1::accel::cpu

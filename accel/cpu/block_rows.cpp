@@ -1,0 +1,148 @@
+// The cpu backend's rows of the spectral operator (R1-SPEC-073, R1-BKD-041) on AVX-512 IFMA: a
+// block application y = L~ x on a compact n x count block, every row the exact sum
+// x_i 2^32 - sum_k M_ik x_k - g_i c rounded once, as SpectralOperator<Q32>::apply_block forms it.
+//
+// A lane per block column (up to 8). Each stored entry's block row is one masked load, offset to
+// x' = x + 2^51 (in [0, 2^52) whenever |x| < 2^51, which magnitude bits check per lane), and
+// M_ik (below 2^52; M raws are below 2^33) is broadcast against it: the low and the high 52 bits
+// of M_ik x'_k accumulate in two lanes, so sum_k M_ik x'_k = LO + 2^52 HI, and
+// sum_k M_ik x_k = LO + 2^52 HI - 2^51 sum_k M_ik. A lane takes at most kFlush entries (below
+// 2^11 terms of under 2^52 each, so no lane passes 2^63) before it is added into 128 bits.
+// Every quantity is formed modulo 2^128; the true numerator is below 2^120 in magnitude, so its
+// i128 reading is exact and the one rounding is apply_block's. A column whose row gathers an
+// entry beyond the offset range takes the exact scalar sum instead.
+#include <immintrin.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "r1/accel/cpu/panel_kernels.hpp"
+#include "r1/solvers/exact_round.hpp"
+#include "r1/solvers/panel.hpp"
+
+namespace r1::accel::cpu {
+namespace {
+
+constexpr int kOffsetBits = 51;
+constexpr std::uint64_t kOffset = std::uint64_t{1} << kOffsetBits;
+constexpr std::size_t kFlush = 2048;         // entries a lane takes before it is widened
+constexpr std::uint64_t kAhead = 32;         // stored entries a gather is prefetched ahead, as apply_block does
+constexpr std::size_t kLanes = 8;
+
+struct RowSums {
+  u128 lo[kLanes], hi[kLanes];
+  std::uint64_t bits[kLanes];
+};
+
+// Entries [b, e) of one row for block columns c0 .. c0 + lanes - 1: the lane sums of M x' widened
+// into `s`, and the OR of the gathered entries' magnitude bits.
+// GCC 12 reports the masked intrinsics' undefined pass-through operand as maybe-uninitialized (a
+// false positive inside avx512fintrin.h), as in panel_kernels.cpp.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+__attribute__((target("avx512f,avx512ifma"))) void ifma_row(const std::uint32_t* col, const fx::Q32* m, std::uint64_t b,
+                                                             std::uint64_t e, std::uint64_t nnz, const fx::Q32* x,
+                                                             std::size_t ld, std::size_t c0, __mmask8 mask, RowSums& s) {
+  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
+  __m512i bits = _mm512_setzero_si512();
+  for (std::uint64_t k0 = b; k0 < e; k0 += kFlush) {
+    const std::uint64_t k1 = std::min<std::uint64_t>(e, k0 + kFlush);
+    __m512i lo = _mm512_setzero_si512(), hi = _mm512_setzero_si512();
+    for (std::uint64_t k = k0; k < k1; ++k) {
+      if (k + kAhead < nnz) {
+        const fx::Q32* ahead = x + static_cast<std::size_t>(col[k + kAhead]) * ld + c0;
+        _mm_prefetch(reinterpret_cast<const char*>(ahead), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char*>(ahead + kLanes - 1), _MM_HINT_T0);
+      }
+      const __m512i v = _mm512_maskz_loadu_epi64(mask, &x[static_cast<std::size_t>(col[k]) * ld + c0].raw);
+      const __m512i xo = _mm512_maskz_add_epi64(mask, v, off);
+      bits = _mm512_or_si512(bits, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
+      const __m512i mk = _mm512_set1_epi64(static_cast<long long>(m[k].raw));
+      lo = _mm512_madd52lo_epu64(lo, xo, mk);
+      hi = _mm512_madd52hi_epu64(hi, xo, mk);
+    }
+    alignas(64) std::uint64_t l[kLanes], h[kLanes];
+    _mm512_store_si512(l, lo);
+    _mm512_store_si512(h, hi);
+    for (std::size_t c = 0; c < kLanes; ++c) {
+      s.lo[c] += l[c];
+      s.hi[c] += h[c];
+    }
+  }
+  alignas(64) std::uint64_t bl[kLanes];
+  _mm512_store_si512(bl, bits);
+  for (std::size_t c = 0; c < kLanes; ++c) s.bits[c] = bl[c];
+}
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
+class IfmaRows final : public spectral::BlockRows {
+ public:
+  IfmaRows(const SpectralOperator<fx::Q32>& op, bool parallel) : op_(op), parallel_(parallel) {}
+
+  void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) override {
+    const Graph& gr = *op_.graph;
+    const std::size_t n = op_.n;
+    const std::uint64_t nnz = gr.row_ptr[n];
+    const bool rank_one = !op_.g.empty();
+    const i128 one = i128{1} << 32;
+    spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) {
+      for (std::size_t i = lo; i < hi; ++i) {
+        const std::uint64_t b = gr.row_ptr[i], e = gr.row_ptr[i + 1];
+        // sum_k M_ik (M raws are positive and below 2^33: no wrap in 128 bits) and the OR of
+        // their magnitude bits.
+        u128 msum = 0;
+        std::uint64_t mbits = 0;
+        for (std::uint64_t k = b; k < e; ++k) {
+          msum += static_cast<std::uint64_t>(op_.m[k].raw);
+          mbits |= spectral::magnitude_bits(op_.m[k].raw);
+        }
+        const bool m_fits = op_.m.empty() || (mbits >> 52) == 0;
+        for (std::size_t c0 = 0; c0 < count; c0 += kLanes) {
+          const std::size_t lanes = std::min(kLanes, count - c0);
+          RowSums s{};
+          if (m_fits) ifma_row(gr.col.data(), op_.m.data(), b, e, nnz, x, count, c0,
+                               static_cast<__mmask8>((1u << lanes) - 1), s);
+          for (std::size_t c = 0; c < lanes; ++c) {
+            const std::size_t col = c0 + c;
+            const std::int64_t xi = x[i * count + col].raw;
+            if (m_fits && (s.bits[c] >> kOffsetBits) == 0) {
+              const u128 mx = s.lo[c] + (s.hi[c] << 52) - (msum << kOffsetBits);  // sum_k M_ik x_k mod 2^128
+              u128 total = static_cast<u128>(static_cast<i128>(xi) * one) - mx;
+              if (rank_one) total -= static_cast<u128>(static_cast<i128>(op_.g[i].raw) * coef[col]);
+              const i128 r = fx::detail::rne_shift(static_cast<i128>(total), 32);
+              if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("spectral round");
+              y[i * count + col] = fx::Q32::from_raw(static_cast<std::int64_t>(r));
+              continue;
+            }
+            spectral::FastExact acc;  // an entry beyond the offset range: product by product
+            acc.add(static_cast<i128>(xi) * one);
+            for (std::uint64_t k = b; k < e; ++k)
+              acc.add(-(static_cast<i128>(op_.m[k].raw) * x[static_cast<std::size_t>(gr.col[k]) * count + col].raw));
+            if (rank_one) acc.add(-(static_cast<i128>(op_.g[i].raw) * coef[col]));
+            y[i * count + col] = fx::Q32::from_raw(acc.round_shift(32));
+          }
+        }
+      }
+    });
+  }
+
+ private:
+  const SpectralOperator<fx::Q32>& op_;
+  bool parallel_;
+};
+
+}  // namespace
+
+Q32RowsFactory rows_factory(Simd level, bool parallel) {
+  if (level != Simd::kAvx512Ifma) return {};
+  return [parallel](const SpectralOperator<fx::Q32>& op) -> std::unique_ptr<spectral::BlockRows> {
+    if (static_cast<int>(detect_simd()) < static_cast<int>(Simd::kAvx512Ifma)) return nullptr;
+    return std::make_unique<IfmaRows>(op, parallel);
+  };
+}
+
+}  // namespace r1::accel::cpu

@@ -1,0 +1,81 @@
+// The cpu backend's operator rows (R1-SPEC-073, R1-BKD-041) against the solver's own
+// SpectralOperator<Q32>::apply_block: the same bits for every row, on a graph with a hub longer
+// than a lane's flush, with and without the rank-one term (rho > 0), for block entries inside the
+// offset range, at its edges and beyond, and for blocks of 1 to 9 columns.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "r1/accel/cpu/panel_kernels.hpp"
+#include "r1/fixedpoint/counter_rng.hpp"
+#include "spectral_test_support.hpp"
+
+namespace r1::accel::cpu {
+namespace {
+
+// A star of `spokes` leaves around one hub, a ring through the leaves, and (when `apart`) a
+// second component, so that rho > 0 and the rank-one term is present.
+Graph hub_graph(int spokes, bool apart) {
+  std::vector<spectral_test::Link> links;
+  for (int i = 0; i < spokes; ++i) {
+    links.emplace_back("hub", "leaf" + std::to_string(i), 1 + i % 5);
+    links.emplace_back("leaf" + std::to_string(i), "leaf" + std::to_string((i + 1) % spokes), 1 + i % 3);
+  }
+  if (apart)
+    for (int i = 0; i < 40; ++i) links.emplace_back("far" + std::to_string(i), "far" + std::to_string((i + 1) % 40), 2);
+  return spectral_test::from_links(links);
+}
+
+// Block entries of about `bits` bits with random signs; a few rows at the offset range's edges
+// (-2^51 inside, 2^51 - 1 inside, 2^51 outside) when `edges`.
+std::vector<fx::Q32> block(std::size_t n, std::size_t count, int bits, bool edges, std::uint64_t seed) {
+  std::vector<fx::Q32> x(n * count);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < count; ++c) {
+      const std::uint64_t r = rng::bits(seed, i, c);
+      x[i * count + c] = fx::Q32::from_raw(static_cast<std::int64_t>(r >> (64 - bits)) - (std::int64_t{1} << (bits - 1)));
+    }
+  if (edges && n > 10) {
+    x[3 * count] = fx::Q32::from_raw(-(std::int64_t{1} << 51));
+    x[5 * count + (count - 1)] = fx::Q32::from_raw((std::int64_t{1} << 51) - 1);
+    x[7 * count] = fx::Q32::from_raw(std::int64_t{1} << 51);
+  }
+  return x;
+}
+
+TEST(CpuBlockRows, TheIfmaRowsGiveTheOperatorsRowsBitForBit) {
+  if (detect_simd() != Simd::kAvx512Ifma) GTEST_SKIP() << "this CPU has no AVX-512 IFMA; below it the solver's rows run";
+  for (const bool apart : {false, true}) {
+    const Graph g = hub_graph(4500, apart);  // the hub's row passes two lane flushes (2048 entries)
+    auto op = spectral_operator_q32(g, SpectralParams{});
+    ASSERT_TRUE(op.is_ok()) << op.status().message();
+    ASSERT_EQ(op->g.empty(), !apart);
+    for (const bool parallel : {false, true}) {
+      const std::shared_ptr<spectral::BlockRows> rows = rows_factory(Simd::kAvx512Ifma, parallel)(*op);
+      ASSERT_TRUE(rows != nullptr);
+      for (const std::size_t count : {std::size_t{1}, std::size_t{7}, std::size_t{9}})
+        for (const auto& [bits, edges] : {std::pair{49, false}, std::pair{50, true}, std::pair{53, false}}) {
+          SCOPED_TRACE("apart " + std::to_string(apart) + " parallel " + std::to_string(parallel) + " count " +
+                       std::to_string(count) + " bits " + std::to_string(bits));
+          const std::vector<fx::Q32> x = block(g.n, count, bits, edges, 0xb10c + count + bits);
+          std::vector<fx::Q32> want(x.size()), got(x.size());
+          op->rows = nullptr;  // the solver's own rows
+          op->apply_block(x.data(), count, want.data(), count, count, false);
+          op->rows = rows;
+          op->apply_block(x.data(), count, got.data(), count, count, parallel);
+          for (std::size_t k = 0; k < x.size(); ++k) ASSERT_EQ(got[k].raw, want[k].raw) << "row " << k / count << " column " << k % count;
+        }
+    }
+  }
+}
+
+TEST(CpuBlockRows, BelowIfmaTheSolversOwnRowsRun) {
+  EXPECT_FALSE(static_cast<bool>(rows_factory(Simd::kPortable, true)));
+  EXPECT_FALSE(static_cast<bool>(rows_factory(Simd::kAvx2, true)));
+}
+
+}  // namespace
+}  // namespace r1::accel::cpu
