@@ -122,8 +122,8 @@ std::vector<TermRun> term_runs(Cols terms) {
 
 // ---- AVX-512 IFMA inner products ---------------------------------------------------------------
 //
-// Row-major, no transposition: each tile's list entries are copied compact (one contiguous run
-// per row when the list is a run of columns), a vector holds 8 list columns of one row, each lane
+// Row-major, no transposition: each tile's list entries are copied compact (one contiguous copy
+// per run of consecutive columns), a vector holds 8 list columns of one row, each lane
 // one pair's sums against a broadcast entry of a block column. Chunks of at most 2048 rows keep
 // every lane below 2^63 (terms below 2^52), and the block columns' offset entries of a chunk
 // (2048 x nw) stay in L2.
