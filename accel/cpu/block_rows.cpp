@@ -8,7 +8,7 @@
 // of M_ik x'_k accumulate in two lanes, so sum_k M_ik x'_k = LO + 2^52 HI, and
 // sum_k M_ik x_k = LO + 2^52 HI - 2^51 sum_k M_ik. A lane takes at most kFlush entries (below
 // 2^11 terms of under 2^52 each, so no lane passes 2^63) before it is added into 128 bits.
-// Every quantity is formed modulo 2^128; the true numerator is below 2^120 in magnitude, so its
+// Every quantity is formed modulo 2^128; the true numerator is below 2^118 in magnitude, so its
 // i128 reading is exact and the one rounding is apply_block's. A column whose row gathers an
 // entry beyond the offset range takes the exact scalar sum instead.
 #include <immintrin.h>
@@ -34,14 +34,14 @@ struct RowSums {
   std::uint64_t bits[kLanes];
 };
 
-// Entries [b, e) of one row for block columns c0 .. c0 + lanes - 1: the lane sums of M x' widened
-// into `s`, and the OR of the gathered entries' magnitude bits.
 // GCC 12 reports the masked intrinsics' undefined pass-through operand as maybe-uninitialized (a
 // false positive inside avx512fintrin.h), as in panel_kernels.cpp.
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
+// Entries [b, e) of one row for the block columns c0 .. (the lanes `mask` sets): the lane sums of
+// M x' widened into `s`, and the OR of the gathered entries' magnitude bits per lane.
 __attribute__((target("avx512f,avx512ifma"))) void ifma_row(const std::uint32_t* col, const fx::Q32* m, std::uint64_t b,
                                                              std::uint64_t e, std::uint64_t nnz, const fx::Q32* x,
                                                              std::size_t ld, std::size_t c0, __mmask8 mask, RowSums& s) {
