@@ -81,7 +81,18 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_row(const std::uint32_t*
 
 class IfmaRows final : public spectral::BlockRows {
  public:
-  IfmaRows(const SpectralOperator<fx::Q32>& op, bool parallel) : op_(op), parallel_(parallel) {}
+  // Each row's sum_k M_ik, fixed for the operator, formed once (M raws are positive and below
+  // 2^33: no wrap in 128 bits); the vector path needs every M raw in [0, 2^52).
+  IfmaRows(const SpectralOperator<fx::Q32>& op, bool parallel) : op_(op), parallel_(parallel), msum_(op.n, 0) {
+    std::uint64_t mbits = 0;
+    for (const fx::Q32 v : op_.m) mbits |= spectral::magnitude_bits(v.raw);
+    m_fits_ = (mbits >> 52) == 0;
+    const Graph& gr = *op_.graph;
+    spectral::for_row_blocks(op_.n, parallel_, [&](std::size_t lo, std::size_t hi) {
+      for (std::size_t i = lo; i < hi; ++i)
+        for (std::uint64_t k = gr.row_ptr[i]; k < gr.row_ptr[i + 1]; ++k) msum_[i] += static_cast<std::uint64_t>(op_.m[k].raw);
+    });
+  }
 
   void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) override {
     const Graph& gr = *op_.graph;
@@ -92,25 +103,16 @@ class IfmaRows final : public spectral::BlockRows {
     spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) {
       for (std::size_t i = lo; i < hi; ++i) {
         const std::uint64_t b = gr.row_ptr[i], e = gr.row_ptr[i + 1];
-        // sum_k M_ik (M raws are positive and below 2^33: no wrap in 128 bits) and the OR of
-        // their magnitude bits.
-        u128 msum = 0;
-        std::uint64_t mbits = 0;
-        for (std::uint64_t k = b; k < e; ++k) {
-          msum += static_cast<std::uint64_t>(op_.m[k].raw);
-          mbits |= spectral::magnitude_bits(op_.m[k].raw);
-        }
-        const bool m_fits = op_.m.empty() || (mbits >> 52) == 0;
         for (std::size_t c0 = 0; c0 < count; c0 += kLanes) {
           const std::size_t lanes = std::min(kLanes, count - c0);
           RowSums s{};
-          if (m_fits) ifma_row(gr.col.data(), op_.m.data(), b, e, nnz, x, count, c0,
+          if (m_fits_) ifma_row(gr.col.data(), op_.m.data(), b, e, nnz, x, count, c0,
                                static_cast<__mmask8>((1u << lanes) - 1), s);
           for (std::size_t c = 0; c < lanes; ++c) {
             const std::size_t col = c0 + c;
             const std::int64_t xi = x[i * count + col].raw;
-            if (m_fits && (s.bits[c] >> kOffsetBits) == 0) {
-              const u128 mx = s.lo[c] + (s.hi[c] << 52) - (msum << kOffsetBits);  // sum_k M_ik x_k mod 2^128
+            if (m_fits_ && (s.bits[c] >> kOffsetBits) == 0) {
+              const u128 mx = s.lo[c] + (s.hi[c] << 52) - (msum_[i] << kOffsetBits);  // sum_k M_ik x_k mod 2^128
               u128 total = static_cast<u128>(static_cast<i128>(xi) * one) - mx;
               if (rank_one) total -= static_cast<u128>(static_cast<i128>(op_.g[i].raw) * coef[col]);
               const i128 r = fx::detail::rne_shift(static_cast<i128>(total), 32);
@@ -133,6 +135,8 @@ class IfmaRows final : public spectral::BlockRows {
  private:
   const SpectralOperator<fx::Q32>& op_;
   bool parallel_;
+  std::vector<u128> msum_;
+  bool m_fits_ = false;
 };
 
 }  // namespace
