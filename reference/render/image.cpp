@@ -348,6 +348,9 @@ Status write_image(const Image& image, const fs::path& path, std::array<float, 3
   spec.attribute("oiio:ColorSpace", "Linear");
   // Lossless and the same bytes for the same pixels; fixed here rather than left to OIIO's default.
   spec.attribute("compression", "zip");
+  // OIIO stamps the time of writing (EXR's capDate) unless told a date: none, so that the same
+  // pixels give the same bytes on every run (a golden set rewritten without a change stays as it was).
+  spec.attribute("DateTime", "");
   return write_atomically(path, ext, spec, OIIO::TypeDesc::FLOAT, pixels.data());
 }
 
