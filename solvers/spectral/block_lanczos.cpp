@@ -190,7 +190,8 @@ class Solver {
     ++passes_;
   }
 
-  void orthonormalize_block(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r);
+  void orthonormalize_block(Col w0, const std::vector<Col>& list, std::size_t gap_begin, std::size_t gap_end,
+                           std::vector<double>& c, std::vector<double>& r);
   bool fused_pass(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r, bool second);
   void robust_block(Col w0, const std::vector<Col>& list, std::vector<double>& c, std::vector<double>& r);
 
@@ -233,16 +234,29 @@ class Solver {
 
 // The new block W = L V_s in columns w0.. (b of them) <- an orthonormal block V_(s+1), with
 // L V_s = list C + V_(s+1) R up to rounding (R1-SPEC-023..024). c is list.size() x b, r is b x b
-// upper triangular, both row-major. Two fused passes serve every step they can; the robust path
-// takes over from whatever a declined pass left (nothing is written by a declined pass).
+// upper triangular, both row-major. Two fused passes serve every step they can: the first against
+// the near list, which is `list` less its entries [gap_begin, gap_end) (their rows of the first
+// pass's C are 0), the second against the whole list. The robust path takes over from whatever a
+// declined pass left (nothing is written by a declined pass).
 template <class Scalar>
-void Solver<Scalar>::orthonormalize_block(Col w0, const std::vector<Col>& list, std::vector<double>& c,
-                                          std::vector<double>& r) {
+void Solver<Scalar>::orthonormalize_block(Col w0, const std::vector<Col>& list, std::size_t gap_begin,
+                                          std::size_t gap_end, std::vector<double>& c, std::vector<double>& r) {
+  const auto at = [&list](std::size_t i) { return list.begin() + static_cast<std::ptrdiff_t>(i); };
+  std::vector<Col> near(list.begin(), at(gap_begin));
+  near.insert(near.end(), at(gap_end), list.end());
   std::vector<double> c1, r1, c2, r2;
-  if (!fused_pass(w0, list, c1, r1, false)) {
+  if (!fused_pass(w0, near, c1, r1, false)) {
     ++robust_blocks_;
     robust_block(w0, list, c, r);
     return;
+  }
+  if (gap_end > gap_begin) {
+    // The first pass's C on the whole list's rows.
+    std::vector<double> whole(list.size() * b_, 0.0);
+    const auto row = [this](std::vector<double>& v, std::size_t i) { return v.begin() + static_cast<std::ptrdiff_t>(i * b_); };
+    std::copy(row(c1, 0), row(c1, gap_begin), whole.begin());
+    std::copy(row(c1, gap_begin), c1.end(), row(whole, gap_end));
+    c1.swap(whole);
   }
   if (!fused_pass(w0, list, c2, r2, true)) {
     ++robust_blocks_;
@@ -401,7 +415,11 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
       const Col dst = last ? next_ : base_ + static_cast<Col>(s + b_);
       apply(base_ + static_cast<Col>(s), dst, b_);
       const std::vector<Col> list = against(s + b_);
-      orthonormalize_block(dst, list, c, r);
+      // The near list of the first pass (R1-SPEC-022): the trivial and locked vectors and the
+      // basis from the block before V_s on; at a cycle's first step the whole basis, since W then
+      // couples with every kept Ritz vector (the Krylov-Schur arrow).
+      const std::size_t head = 1 + locked_.size();
+      orthonormalize_block(dst, list, head, head + (s == k ? 0 : s - b_), c, r);
       // Column block s of H: the coefficients against the basis (the trivial and locked
       // coefficients are rounding noise and leave).
       const std::size_t off = 1 + locked_.size();

@@ -19,6 +19,7 @@
 #include "r1/reference/snapshot_builder.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/fixedpoint/hemera.hpp"
+#include "r1/solvers/panel.hpp"
 #include "spectral_test_support.hpp"
 #include "test_support.hpp"
 
@@ -308,6 +309,60 @@ TEST(Spectral, ABackendsRowsGiveTheHostsBits) {
   auto got = r1::spectral_embedding_q32(g, defaults(), {}, declined);
   ASSERT_TRUE(want.is_ok() && got.is_ok());
   EXPECT_EQ(spectrum_digest(*got), spectrum_digest(*want));
+}
+
+// The portable kernels, recording the shape of every sweep of inner products.
+class SweepRecorder final : public r1::spectral::PanelOps<Q32> {
+ public:
+  struct Sweep {
+    std::size_t list, block;
+  };
+  SweepRecorder(std::size_t n, int e, bool parallel, int frac, std::vector<Sweep>* sweeps)
+      : PanelOps(n, e, parallel, frac), sweeps_(sweeps) {}
+  void dots(const r1::spectral::Panel<Q32>& p, r1::spectral::Cols qs, r1::spectral::Cols ws, std::span<double> out) const override {
+    sweeps_->push_back(Sweep{qs.size(), ws.size()});
+    PanelOps::dots(p, qs, ws, out);
+  }
+
+ private:
+  std::vector<Sweep>* sweeps_;
+};
+
+// R1-SPEC-022..023: a step's first pass sweeps the near list (the trivial and locked vectors and
+// the last two blocks; the whole list only at a cycle's first step), its second pass the whole
+// list. A fused pass's sweep is the one whose columns are the list followed by the block itself.
+TEST(Spectral, TheFirstPassSweepsOnlyTheNearList) {
+  const r1::Graph g = generated(r1::GenKind::kBa, 600);
+  std::vector<SweepRecorder::Sweep> sweeps;
+  r1::SpectralOptions rec;
+  rec.q32_kernels = [&sweeps](std::size_t n, int e, bool parallel, int frac) -> std::unique_ptr<r1::spectral::PanelOps<Q32>> {
+    return std::make_unique<SweepRecorder>(n, e, parallel, frac, &sweeps);
+  };
+  auto got = r1::spectral_embedding_q32(g, defaults(), {}, rec);
+  auto want = r1::spectral_embedding_q32(g, defaults());
+  ASSERT_TRUE(got.is_ok() && want.is_ok());
+  EXPECT_EQ(spectrum_digest(*got), spectrum_digest(*want));  // recording changes nothing
+  check_invariants(g, *got, 1e-9, 1e-8);
+  // The steps' pairs of sweeps: a block of b = 7 against a list ending in the block.
+  constexpr std::size_t b = 7, want_pairs = 5;
+  std::vector<std::size_t> lists;
+  for (const auto& s : sweeps)
+    if (s.block == b && s.list > b) lists.push_back(s.list - b);
+  const std::size_t near_max = 1 + want_pairs + 2 * b;
+  std::size_t shortened = 0, whole = 0;
+  for (std::size_t i = 0; i + 1 < lists.size(); ++i) {
+    if (lists[i] <= near_max && lists[i + 1] > lists[i]) {
+      ++shortened;  // first pass on the near list, second on the whole
+      ++i;
+    } else if (lists[i] == lists[i + 1]) {
+      ++whole;  // a cycle's first step (or a short basis): both passes on the whole list
+      ++i;
+    } else {
+      ADD_FAILURE() << "sweep pair " << i << ": " << lists[i] << " then " << lists[i + 1] << " list columns";
+    }
+  }
+  EXPECT_GT(shortened, 10 * whole) << whole;
+  EXPECT_GE(whole, std::size_t{got->restarts + 1});
 }
 
 TEST(Spectral, MatrixMarketExportIsTheOperator) {
