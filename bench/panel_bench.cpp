@@ -45,10 +45,11 @@ std::vector<std::uint32_t> run(std::uint32_t first, std::size_t count) {
 }
 
 // A step's list (R1-SPEC-022): the trivial column, the five locked slots in the order of their
-// eigenvalues, then the basis so far: `count` columns.
+// eigenvalues, then basis columns up to the new block: `count` columns. 20 is a first pass's near
+// list (the last two blocks), the longer ones a second pass's whole list.
 std::vector<std::uint32_t> step_list(std::size_t count) {
   std::vector<std::uint32_t> v = {0, 3, 1, 2, 5, 4};
-  const std::vector<std::uint32_t> basis = run(6, count - v.size());
+  const std::vector<std::uint32_t> basis = run(kW0 - static_cast<std::uint32_t>(count - v.size()), count - v.size());
   v.insert(v.end(), basis.begin(), basis.end());
   return v;
 }
@@ -130,10 +131,11 @@ void BM_Ritz(benchmark::State& state) {
   }
 }
 
-// rows x list length x SIMD level; the list lengths are a cycle's first and last steps.
+// rows x list length x SIMD level; the list lengths are a first pass's near list and a second
+// pass's whole list at a cycle's first and last steps.
 void step_args(benchmark::internal::Benchmark* b) {
   for (const long n : {100000L, 1000000L})
-    for (const long nl : {83L, 195L})
+    for (const long nl : {20L, 83L, 195L})
       for (const long level : {0L, 1L, 2L}) b->Args({n, nl, level});
 }
 

@@ -30,11 +30,13 @@
 
 #include "r1/solvers/exact_round.hpp"
 
-// GCC 12 reports the masked shift builtin's undefined pass-through operand as maybe-uninitialized
-// (a false positive inside avx512fintrin.h; every lane of the shift is defined). Clang has no
-// such warning group.
+// GCC 12 reports the shift builtins' undefined pass-through operand as (maybe-)uninitialized (a
+// false positive inside avx512fintrin.h; every lane of a shift is defined). Clang has no such
+// warning group.
 #if defined(__GNUC__) && !defined(__clang__)
-#define R1_MASKED_SHIFT_WARNING_OFF _Pragma("GCC diagnostic push") _Pragma("GCC diagnostic ignored \"-Wmaybe-uninitialized\"")
+#define R1_MASKED_SHIFT_WARNING_OFF                                                      \
+  _Pragma("GCC diagnostic push") _Pragma("GCC diagnostic ignored \"-Wmaybe-uninitialized\"") \
+      _Pragma("GCC diagnostic ignored \"-Wuninitialized\"")
 #define R1_MASKED_SHIFT_WARNING_ON _Pragma("GCC diagnostic pop")
 #else
 #define R1_MASKED_SHIFT_WARNING_OFF
@@ -283,6 +285,7 @@ struct CombinePlan {
   std::size_t no = 0, nt = 0, no_pad = 0;
   std::vector<std::uint64_t> c0, c1;  // [t * no_pad + o], zero past no
   std::vector<u128> csum;             // sum_t c'_t per output
+  std::vector<std::uint64_t> k_lo, k_hi;  // nt 2^114 - 2^51 csum per output, mod 2^128, zero past no
   std::vector<std::int64_t> coef;     // the multiples of 2^-60 [t * no + o], for the exact scalar rows
 };
 
@@ -318,20 +321,24 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_combine_rows(const Combi
   }
 }
 
-// A row's term entries when the terms are a run of columns: xo = x + 2^51, their sum and the OR
-// of their magnitude bits, 8 at a time.
+// A row's term entries, run by run: xo = x + 2^51, their sum and the OR of their magnitude bits,
+// 8 at a time (a run's last vector masked), reduced once for the row.
 R1_MASKED_SHIFT_WARNING_OFF
-__attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::int64_t* x, std::size_t nt, std::uint64_t* xo,
-                                                                      std::uint64_t& sum, std::uint64_t& bits) {
+__attribute__((target("avx512f,avx512ifma"))) void ifma_offset_row(const std::int64_t* row, const std::vector<TermRun>& runs,
+                                                                      std::uint64_t* xo, std::uint64_t& sum, std::uint64_t& bits) {
   const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
   __m512i vs = _mm512_setzero_si512(), vb = _mm512_setzero_si512();
-  for (std::size_t t = 0; t < nt; t += 8) {
-    const __mmask8 mask = tail_mask(nt - t);
-    const __m512i v = _mm512_maskz_loadu_epi64(mask, x + t);
-    const __m512i o = _mm512_maskz_add_epi64(mask, v, off);
-    _mm512_mask_storeu_epi64(xo + t, mask, o);
-    vs = _mm512_add_epi64(vs, o);
-    vb = _mm512_or_si512(vb, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
+  for (const TermRun& run : runs) {
+    const std::int64_t* x = row + run.col;
+    std::uint64_t* out = xo + run.at;
+    for (std::size_t t = 0; t < run.count; t += 8) {
+      const __mmask8 mask = tail_mask(run.count - t);
+      const __m512i v = _mm512_maskz_loadu_epi64(mask, x + t);
+      const __m512i o = _mm512_maskz_add_epi64(mask, v, off);
+      _mm512_mask_storeu_epi64(out + t, mask, o);
+      vs = _mm512_add_epi64(vs, o);
+      vb = _mm512_or_si512(vb, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
+    }
   }
   alignas(64) std::uint64_t ls[8], lb[8];
   _mm512_store_si512(ls, vs);
@@ -341,6 +348,58 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_offset_run(const std::in
     sum += ls[k];
     bits |= lb[k];
   }
+}
+R1_MASKED_SHIFT_WARNING_ON
+
+// The one rounding of outputs og .. og + 7 of a row whose entries all took the vector path: per
+// lane the total of the scalar epilogue in CpuPanelOps::combine,
+//   L0 + 2^52 (H0 + L1) + 2^104 H1 + (nt 2^114 - 2^51 sum c') - 2^63 sum x' + base 2^60,
+// formed modulo 2^128 as two 64-bit halves (H0 + L1 < 2^64: both below 2^63), then RNE(. / 2^60)
+// as fx::detail::rne_shift does it. `k_lo`/`k_hi` hold the per-output constant, `base` the
+// row's base entries (or null). Writes 8 results to out + og; false when a lane below `no`
+// does not fit 64 bits (the caller's scalar epilogue then reports it).
+R1_MASKED_SHIFT_WARNING_OFF
+__attribute__((target("avx512f"))) bool ifma_round8(const std::uint64_t* sums, std::size_t np, std::size_t og, std::size_t no,
+                                                    const std::uint64_t* k_lo, const std::uint64_t* k_hi, std::uint64_t xsum,
+                                                    const std::int64_t* base, std::int64_t* out) {
+  const __m512i one = _mm512_set1_epi64(1);
+  const __m512i l0 = _mm512_loadu_si512(sums + og), h0 = _mm512_loadu_si512(sums + np + og);
+  const __m512i l1 = _mm512_loadu_si512(sums + 2 * np + og), h1 = _mm512_loadu_si512(sums + 3 * np + og);
+  const __m512i b = _mm512_add_epi64(h0, l1);
+  __m512i lo = _mm512_add_epi64(l0, _mm512_slli_epi64(b, 52));
+  __m512i hi = _mm512_add_epi64(_mm512_srli_epi64(b, 12), _mm512_slli_epi64(h1, 40));
+  hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(lo, l0), hi, one);
+  // + (nt 2^114 - 2^51 sum c')
+  __m512i t = _mm512_add_epi64(lo, _mm512_loadu_si512(k_lo + og));
+  hi = _mm512_add_epi64(hi, _mm512_loadu_si512(k_hi + og));
+  hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(t, lo), hi, one);
+  lo = t;
+  // - 2^63 sum x'
+  const __m512i xl = _mm512_set1_epi64(static_cast<long long>(xsum << 63));
+  const __m512i xh = _mm512_set1_epi64(static_cast<long long>(xsum >> 1));
+  t = _mm512_sub_epi64(lo, xl);
+  hi = _mm512_sub_epi64(hi, xh);
+  hi = _mm512_mask_sub_epi64(hi, _mm512_cmplt_epu64_mask(lo, xl), hi, one);
+  lo = t;
+  if (base != nullptr) {  // + base 2^60, sign-extended
+    const __m512i bv = _mm512_loadu_si512(base + og);
+    t = _mm512_add_epi64(lo, _mm512_slli_epi64(bv, 60));
+    hi = _mm512_add_epi64(hi, _mm512_srai_epi64(bv, 4));
+    hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(t, lo), hi, one);
+    lo = t;
+  }
+  // q = floor(T / 2^60); ties to the even q.
+  const __m512i q = _mm512_or_si512(_mm512_srli_epi64(lo, 60), _mm512_slli_epi64(hi, 4));
+  const __m512i rem = _mm512_and_si512(lo, _mm512_set1_epi64((std::int64_t{1} << 60) - 1));
+  const __m512i half = _mm512_set1_epi64(std::int64_t{1} << 59);
+  const __mmask8 up = _mm512_cmpgt_epu64_mask(rem, half) |
+                      (_mm512_cmpeq_epu64_mask(rem, half) & _mm512_test_epi64_mask(q, one));
+  // T / 2^60 fits 64 bits when hi lies in [-2^59, 2^59); q + 1 then overflows only from 2^63 - 1.
+  const __mmask8 fits = _mm512_cmpeq_epu64_mask(_mm512_srli_epi64(_mm512_add_epi64(hi, half), 60), _mm512_setzero_si512());
+  const __mmask8 wraps = _mm512_cmpeq_epu64_mask(q, _mm512_set1_epi64(INT64_MAX)) & up;
+  _mm512_storeu_si512(out + og, _mm512_mask_add_epi64(q, up, q, one));
+  const __mmask8 lanes = tail_mask(no - og);
+  return ((~fits | wraps) & lanes) == 0;
 }
 R1_MASKED_SHIFT_WARNING_ON
 
@@ -509,9 +568,32 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
     }
   const u128 nt_ck = static_cast<u128>(nt) << 114;
   const i128 one = i128{1} << 60;
+  plan.k_lo.assign(plan.no_pad, 0);
+  plan.k_hi.assign(plan.no_pad, 0);
+  for (std::size_t o = 0; o < no; ++o) {
+    const u128 k = nt_ck - (plan.csum[o] << kOffsetBits);
+    plan.k_lo[o] = static_cast<std::uint64_t>(k);
+    plan.k_hi[o] = static_cast<std::uint64_t>(k >> 64);
+  }
   // The terms as runs of consecutive columns (a pass's terms are two: the block, then the list),
   // each offset 8 entries at a time; a list of scattered columns is many runs of one.
   const std::vector<TermRun> runs = term_runs(terms);
+  // The byte spans of a row the combination reads or writes (the term runs, the bases, the
+  // outputs), merged: what is prefetched of the rows ahead. A pass's combination reads a tenth of
+  // a 209-column row, and at 10^6 rows prefetching whole rows streamed the whole panel.
+  std::vector<std::pair<std::size_t, std::size_t>> spans;
+  {
+    for (const TermRun& run : runs) spans.emplace_back(run.col * sizeof(fx::Q32), (run.col + run.count) * sizeof(fx::Q32));
+    for (const Cols cols : {bases, outs})
+      for (const std::uint32_t col : cols) spans.emplace_back(col * sizeof(fx::Q32), (col + 1) * sizeof(fx::Q32));
+    std::sort(spans.begin(), spans.end());
+    std::vector<std::pair<std::size_t, std::size_t>> merged;
+    for (const auto& sp : spans) {
+      if (!merged.empty() && sp.first <= merged.back().second + 64) merged.back().second = std::max(merged.back().second, sp.second);
+      else merged.push_back(sp);
+    }
+    spans.swap(merged);
+  }
   spectral::for_row_blocks(size(), parallel(), [&](std::size_t lo, std::size_t hi) {
     std::vector<std::uint64_t> xo(kCombineRows * nt), sums(kCombineRows * 4 * plan.no_pad);
     std::uint64_t xsum[kCombineRows], bits[kCombineRows];
@@ -521,37 +603,33 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
       xr[r] = xo.data() + r * nt;
       sr[r] = sums.data() + r * 4 * plan.no_pad;
     }
-    std::vector<std::int64_t> result(no);
-    const std::size_t row_bytes = p.cols() * sizeof(fx::Q32);
+    std::vector<std::int64_t> result(plan.no_pad), base_raw(bases.empty() ? 0 : plan.no_pad, 0);
+    // The vector epilogue of row r of the current group into result[]; false when an output
+    // does not fit (the scalar epilogue then throws as the portable kernel does).
+    const auto vector_round = [&](const fx::Q32* row, std::size_t r) {
+      if (!bases.empty())
+        for (std::size_t o = 0; o < no; ++o) base_raw[o] = row[bases[o]].raw;
+      for (std::size_t og = 0; og < plan.no_pad; og += 8)
+        if (!ifma_round8(sr[r], plan.no_pad, og, no, plan.k_lo.data(), plan.k_hi.data(), xsum[r],
+                         bases.empty() ? nullptr : base_raw.data(), result.data()))
+          return false;
+      return true;
+    };
     for (std::size_t i0 = lo; i0 < hi; i0 += kCombineRows) {
       const std::size_t rows = std::min(kCombineRows, hi - i0);
-      // The next rows on their way to the cache while these are combined.
+      // The next rows' spans on their way to the cache while these are combined (every line a
+      // span touches: its first byte, then every 64 bytes, and its last byte).
       for (std::size_t i = i0 + kCombineRows; i < std::min(hi, i0 + 2 * kCombineRows); ++i) {
         const char* ahead = reinterpret_cast<const char*>(p.row(i));
-        for (std::size_t b = 0; b < row_bytes + 63; b += 64) _mm_prefetch(ahead + b, _MM_HINT_T0);
+        for (const auto& [b, e] : spans) {
+          for (std::size_t at = b; at < e; at += 64) _mm_prefetch(ahead + at, _MM_HINT_T0);
+          _mm_prefetch(ahead + e - 1, _MM_HINT_T0);
+        }
       }
       // Each row's terms offset by 2^51, their sum (below nt 2^52 < 2^63 whenever the bits allow
       // the row) and the OR of their magnitude bits.
-      for (std::size_t r = 0; r < rows; ++r) {
-        const fx::Q32* row = p.row(i0 + r);
-        std::uint64_t* x = xo.data() + r * nt;
-        xsum[r] = bits[r] = 0;
-        for (const TermRun& run : runs) {
-          if (run.count >= 4) {
-            std::uint64_t sum = 0, b = 0;
-            ifma_offset_run(&row[run.col].raw, run.count, x + run.at, sum, b);
-            xsum[r] += sum;
-            bits[r] |= b;
-          } else {
-            for (std::size_t t = 0; t < run.count; ++t) {
-              const std::int64_t v = row[run.col + t].raw;
-              x[run.at + t] = static_cast<std::uint64_t>(v) + kOffset;
-              xsum[r] += x[run.at + t];
-              bits[r] |= spectral::magnitude_bits(v);
-            }
-          }
-        }
-      }
+      for (std::size_t r = 0; r < rows; ++r)
+        ifma_offset_row(&p.row(i0 + r)->raw, runs, xo.data() + r * nt, xsum[r], bits[r]);
       for (std::size_t og = 0; og < plan.no_pad; og += 8) {
         if (rows == kCombineRows) {
           ifma_combine_rows<kCombineRows>(plan, xr, og, sr);
@@ -568,6 +646,8 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
             for (std::size_t t = 0; t < nt; ++t) acc.add(static_cast<i128>(plan.coef[t * no + o]) * row[terms[t]].raw);
             result[o] = acc.round_shift(60);
           }
+        } else if (vector_round(row, r)) {
+          // result[] holds the row's outputs
         } else {
           const u128 xs = static_cast<u128>(xsum[r]) << 63;
           const std::size_t np = plan.no_pad;

@@ -142,6 +142,43 @@ TEST(CpuPanelKernels, ABadCoefficientIsRefusedAtEveryLevel) {
   }
 }
 
+// A combined entry beyond 64 bits is refused at every level, as the portable kernel refuses it:
+// 520 terms of 2^51 - 1 (the vector path's largest entry) with coefficients just below 8 sum to
+// about 2^63.02. One output (one lane) and nine (a second vector of lanes) overflow in row 5 only.
+TEST(CpuPanelKernels, ACombinedEntryBeyond64BitsIsRefusedAtEveryLevel) {
+  constexpr std::size_t n = 16, nt = 520;
+  Panel<fx::Q32> p(n, nt + 9);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < nt; ++c) p.at(i, c) = fx::Q32::from_raw(i == 5 ? (std::int64_t{1} << 51) - 1 : 1000);
+  std::vector<std::uint32_t> terms(nt);
+  std::iota(terms.begin(), terms.end(), 0u);
+  for (const std::size_t no : {std::size_t{1}, std::size_t{9}}) {
+    std::vector<std::uint32_t> outs(no);
+    std::iota(outs.begin(), outs.end(), static_cast<std::uint32_t>(nt));
+    const std::vector<double> coef(nt * no, 7.99);
+    Panel<fx::Q32> want = p;
+    EXPECT_THROW(PanelOps<fx::Q32>(n, 4, false, 48).combine(want, outs, {}, terms, coef), fx::OverflowError);
+    for (const Simd s : levels()) {
+      Panel<fx::Q32> got = p;
+      EXPECT_THROW(make_panel_kernels(n, 4, false, 48, s)->combine(got, outs, {}, terms, coef), fx::OverflowError)
+          << simd_name(s) << " outputs " << no;
+    }
+    // One step below the edge every level agrees with the portable kernel: 1000-raw rows only.
+    Panel<fx::Q32> small(n, nt + 9);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t c = 0; c < nt; ++c) small.at(i, c) = fx::Q32::from_raw(i == 5 ? -(std::int64_t{1} << 51) + 1 : 1000);
+    const std::vector<double> fits(nt * no, 1.0);  // 520 (2^51 - 1) < 2^63: fits
+    Panel<fx::Q32> w2 = small;
+    PanelOps<fx::Q32>(n, 4, false, 48).combine(w2, outs, {}, terms, fits);
+    for (const Simd s : levels()) {
+      Panel<fx::Q32> g2 = small;
+      make_panel_kernels(n, 4, false, 48, s)->combine(g2, outs, {}, terms, fits);
+      for (std::size_t i = 0; i < n; ++i)
+        for (const std::uint32_t c : outs) ASSERT_EQ(g2.at(i, c).raw, w2.at(i, c).raw) << simd_name(s) << " row " << i;
+    }
+  }
+}
+
 TEST(CpuPanelKernels, TheChosenLevelFollowsTheEnvironmentAndRefusesWhatTheCpuLacks) {
   {
     test::ScopedEnv env("R1_CPU_SIMD", "portable");
