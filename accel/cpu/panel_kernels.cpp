@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -154,6 +155,7 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t r
   const __mmask8 mask = tail_mask(d.nq - q0);
   const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
   __m512i lo[G], hi[G];
+#pragma GCC unroll 8
   for (std::size_t j = 0; j < G; ++j) {
     lo[j] = _mm512_loadu_si512(d.lo.data() + (c0 + j) * d.nq_pad + q0);
     hi[j] = _mm512_loadu_si512(d.hi.data() + (c0 + j) * d.nq_pad + q0);
@@ -167,12 +169,14 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_dots_group(std::size_t r
       sx = _mm512_add_epi64(sx, xo);
     }
     const std::uint64_t* wr = d.wt.data() + wr0 + r * d.nw + c0;
+#pragma GCC unroll 8  // unrolled, the accumulators stay in registers (else a store and a load per IFMA)
     for (std::size_t j = 0; j < G; ++j) {
       const __m512i b = _mm512_set1_epi64(static_cast<long long>(wr[j]));
       lo[j] = _mm512_madd52lo_epu64(lo[j], xo, b);
       hi[j] = _mm512_madd52hi_epu64(hi[j], xo, b);
     }
   }
+#pragma GCC unroll 8
   for (std::size_t j = 0; j < G; ++j) {
     _mm512_storeu_si512(d.lo.data() + (c0 + j) * d.nq_pad + q0, lo[j]);
     _mm512_storeu_si512(d.hi.data() + (c0 + j) * d.nq_pad + q0, hi[j]);
@@ -498,7 +502,14 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
   d.nq = nq;
   d.nw = nw;
   d.nq_pad = (nq + 7) / 8 * 8;
-  d.runs = term_runs(qs);
+  // The list in panel order, so that its runs are as long as they can be: a step's list is the
+  // trivial column, the locked columns in eigenvalue order and the basis, which in panel order
+  // is one run (the near list two). order[k] is the list position of the k-th column in that order.
+  std::vector<std::uint32_t> order(nq), cols(nq);
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&qs](std::uint32_t a, std::uint32_t b) { return qs[a] < qs[b]; });
+  for (std::size_t k = 0; k < nq; ++k) cols[k] = qs[order[k]];
+  d.runs = term_runs(cols);
   for (std::size_t r0 = lo; r0 < hi; r0 += kChunk) {
     const std::size_t rows = std::min(kChunk, hi - r0);
     d.wt.resize(rows * nw);
@@ -514,14 +525,14 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
     const u128 rows_kk = static_cast<u128>(rows) << 102;
     for (std::size_t q = 0; q < nq; ++q)
       for (std::size_t c = 0; c < nw; ++c) {
-        const std::size_t k = q * nw + c;
+        const std::size_t k = order[q] * nw + c;
         if (((d.xbits[q] | d.wbits[c]) >> kOffsetBits) == 0) {
           const std::size_t l = c * d.nq_pad + q;
           const u128 t = static_cast<u128>(d.lo[l]) + (static_cast<u128>(d.hi[l]) << 52) -
                          ((static_cast<u128>(d.xsum[q]) + d.wsum[c]) << kOffsetBits) + rows_kk;
           acc[k].add(static_cast<i128>(t));
         } else {
-          exact_pair(p, qs[q], ws[c], r0, r0 + rows, acc[k]);
+          exact_pair(p, cols[q], ws[c], r0, r0 + rows, acc[k]);
         }
       }
   }
