@@ -9,14 +9,21 @@
 // Entries are random multiples of 2^-48 of magnitude below 2^3, as unit basis vectors' are
 // (R1-SPEC-011). Generation is outside the timed loop. Arguments: rows, list length, SIMD level
 // (0 portable, 1 avx2, 2 avx512ifma); levels this CPU lacks are skipped with the reason.
+//   * Operator: one block application of L~ to 7 vectors (below).
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <string>
 #include <numeric>
 #include <vector>
 
 #include "r1/accel/cpu/panel_kernels.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
+#include "r1/reference/generate.hpp"
+#include "r1/reference/graph_build.hpp"
+#include "r1/solvers/spectral.hpp"
 
 namespace {
 
@@ -131,6 +138,53 @@ void BM_Ritz(benchmark::State& state) {
   }
 }
 
+// The operator's block application (R1-SPEC-073) on a Barabasi-Albert graph (m = 10), 7 vectors
+// of unit-vector magnitude, on the cpu backend's IFMA rows (level 2) or the solver's own (0).
+// Arguments: particles, block columns, level. 10^6 particles (10^7 links, a minute to generate)
+// only with R1_BENCH_LARGE=1.
+void BM_Operator(benchmark::State& state) {
+  Simd level;
+  if (!setup(state, level)) return;
+  const auto n = static_cast<std::int64_t>(state.range(0));
+  if (n > 100000 && (std::getenv("R1_BENCH_LARGE") == nullptr || std::string(std::getenv("R1_BENCH_LARGE")) != "1")) {
+    state.SkipWithError("set R1_BENCH_LARGE=1 for 10^6 particles");
+    return;
+  }
+  static std::int64_t made = 0;
+  static r1::Graph g;
+  static std::unique_ptr<r1::SpectralOperator<r1::fx::Q32>> op;
+  if (made != n) {
+    r1::GenParams gp;
+    gp.kind = r1::GenKind::kBa;
+    gp.n = n;
+    gp.m = 10;
+    auto snap = r1::generate(gp);
+    auto built = snap.is_ok() ? r1::build_graph(*snap) : r1::Result<r1::Graph>(snap.status());
+    if (!built.is_ok()) {
+      state.SkipWithError(built.status().message().c_str());
+      return;
+    }
+    op.reset();
+    g = std::move(built).value();
+    auto o = r1::spectral_operator_q32(g, r1::SpectralParams{});
+    if (!o.is_ok()) {
+      state.SkipWithError(o.status().message().c_str());
+      return;
+    }
+    op = std::make_unique<r1::SpectralOperator<r1::fx::Q32>>(std::move(o).value());
+    made = n;
+  }
+  op->rows = level == Simd::kAvx512Ifma ? std::shared_ptr<r1::spectral::BlockRows>(r1::accel::cpu::rows_factory(level, true)(*op)) : nullptr;
+  const auto rows = static_cast<std::size_t>(n), count = static_cast<std::size_t>(state.range(1));
+  std::vector<r1::fx::Q32> x(rows * count), y(rows * count);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    x[i] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(r1::rng::bits(0x0be7, i, 0) >> 15) - (std::int64_t{1} << 48));
+  for (auto _ : state) {
+    op->apply_block(x.data(), count, y.data(), count, count, true);
+    benchmark::DoNotOptimize(y.data());
+  }
+}
+
 // rows x list length x SIMD level; the list lengths are a first pass's near list and a second
 // pass's whole list at a cycle's first and last steps.
 void step_args(benchmark::internal::Benchmark* b) {
@@ -141,6 +195,7 @@ void step_args(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_Dots)->Apply(step_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Combine)->Apply(step_args)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Operator)->ArgsProduct({{100000L, 1000000L}, {7L}, {0L, 2L}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Ritz)->ArgsProduct({{100000L, 1000000L}, {189L}, {0L, 2L}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #include "r1/accel/cpu/panel_kernels.hpp"
@@ -28,6 +29,7 @@ constexpr std::uint64_t kOffset = std::uint64_t{1} << kOffsetBits;
 constexpr std::size_t kFlush = 2048;         // entries a lane takes before it is widened
 constexpr std::uint64_t kAhead = 32;         // stored entries a gather is prefetched ahead, as apply_block does
 constexpr std::size_t kLanes = 8;
+constexpr std::size_t kPadFrom = std::size_t{1} << 15;  // rows from which x is copied line-aligned
 
 struct RowSums {
   u128 lo[kLanes], hi[kLanes];
@@ -94,23 +96,39 @@ class IfmaRows final : public spectral::BlockRows {
     });
   }
 
-  void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) override {
+  void apply(const fx::Q32* x_in, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) override {
     const Graph& gr = *op_.graph;
     const std::size_t n = op_.n;
     const std::uint64_t nnz = gr.row_ptr[n];
     const bool rank_one = !op_.g.empty();
     const i128 one = i128{1} << 32;
+    // The gathers read x from a copy whose rows are 8 entries (one 64-byte line) apart and
+    // line-aligned when a row would straddle lines: 7 entries 56 bytes apart straddle two lines
+    // 7 times in 8, and on large graphs each line of a gather comes from memory (1, 2 and 4
+    // entries never straddle). Same values, same sums.
+    const fx::Q32* x = x_in;
+    std::size_t ld = count;
+    if (m_fits_ && count < kLanes && kLanes % count != 0 && n >= kPadFrom) {
+      ld = kLanes;
+      padded_.resize(n * kLanes + kLanes);
+      fx::Q32* base = padded_.data();
+      base += (64 - reinterpret_cast<std::uintptr_t>(base) % 64) % 64 / sizeof(fx::Q32);
+      spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t i = lo; i < hi; ++i) std::copy_n(x_in + i * count, count, base + i * kLanes);
+      });
+      x = base;
+    }
     spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) {
       for (std::size_t i = lo; i < hi; ++i) {
         const std::uint64_t b = gr.row_ptr[i], e = gr.row_ptr[i + 1];
         for (std::size_t c0 = 0; c0 < count; c0 += kLanes) {
           const std::size_t lanes = std::min(kLanes, count - c0);
           RowSums s{};
-          if (m_fits_) ifma_row(gr.col.data(), op_.m.data(), b, e, nnz, x, count, c0,
+          if (m_fits_) ifma_row(gr.col.data(), op_.m.data(), b, e, nnz, x, ld, c0,
                                static_cast<__mmask8>((1u << lanes) - 1), s);
           for (std::size_t c = 0; c < lanes; ++c) {
             const std::size_t col = c0 + c;
-            const std::int64_t xi = x[i * count + col].raw;
+            const std::int64_t xi = x[i * ld + col].raw;
             if (m_fits_ && (s.bits[c] >> kOffsetBits) == 0) {
               const u128 mx = s.lo[c] + (s.hi[c] << 52) - (msum_[i] << kOffsetBits);  // sum_k M_ik x_k mod 2^128
               u128 total = static_cast<u128>(static_cast<i128>(xi) * one) - mx;
@@ -123,7 +141,7 @@ class IfmaRows final : public spectral::BlockRows {
             spectral::FastExact acc;  // an entry beyond the offset range: product by product
             acc.add(static_cast<i128>(xi) * one);
             for (std::uint64_t k = b; k < e; ++k)
-              acc.add(-(static_cast<i128>(op_.m[k].raw) * x[static_cast<std::size_t>(gr.col[k]) * count + col].raw));
+              acc.add(-(static_cast<i128>(op_.m[k].raw) * x[static_cast<std::size_t>(gr.col[k]) * ld + col].raw));
             if (rank_one) acc.add(-(static_cast<i128>(op_.g[i].raw) * coef[col]));
             y[i * count + col] = fx::Q32::from_raw(acc.round_shift(32));
           }
@@ -137,6 +155,7 @@ class IfmaRows final : public spectral::BlockRows {
   bool parallel_;
   std::vector<u128> msum_;
   bool m_fits_ = false;
+  std::vector<fx::Q32> padded_;  // x with rows of 8 entries, kept across applications
 };
 
 }  // namespace

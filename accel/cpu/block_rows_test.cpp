@@ -48,8 +48,10 @@ std::vector<fx::Q32> block(std::size_t n, std::size_t count, int bits, bool edge
 
 TEST(CpuBlockRows, TheIfmaRowsGiveTheOperatorsRowsBitForBit) {
   if (detect_simd() != Simd::kAvx512Ifma) GTEST_SKIP() << "this CPU has no AVX-512 IFMA; below it the solver's rows run";
-  for (const bool apart : {false, true}) {
-    const Graph g = hub_graph(4500, apart);  // the hub's row passes two lane flushes (2048 entries)
+  // 4,500 spokes: the hub's row passes two lane flushes (2048 entries); 40,000: above the size
+  // from which blocks of fewer than 8 columns are gathered from a line-aligned copy.
+  for (const auto& [spokes, apart] : {std::pair{4500, false}, std::pair{4500, true}, std::pair{40000, true}}) {
+    const Graph g = hub_graph(spokes, apart);
     auto op = spectral_operator_q32(g, SpectralParams{});
     ASSERT_TRUE(op.is_ok()) << op.status().message();
     ASSERT_EQ(op->g.empty(), !apart);
@@ -58,7 +60,7 @@ TEST(CpuBlockRows, TheIfmaRowsGiveTheOperatorsRowsBitForBit) {
       ASSERT_TRUE(rows != nullptr);
       for (const std::size_t count : {std::size_t{1}, std::size_t{7}, std::size_t{9}})
         for (const auto& [bits, edges] : {std::pair{49, false}, std::pair{50, true}, std::pair{53, false}}) {
-          SCOPED_TRACE("apart " + std::to_string(apart) + " parallel " + std::to_string(parallel) + " count " +
+          SCOPED_TRACE("spokes " + std::to_string(spokes) + " apart " + std::to_string(apart) + " parallel " + std::to_string(parallel) + " count " +
                        std::to_string(count) + " bits " + std::to_string(bits));
           const std::vector<fx::Q32> x = block(g.n, count, bits, edges, 0xb10c + count + bits);
           std::vector<fx::Q32> want(x.size()), got(x.size());
