@@ -142,6 +142,36 @@ TEST(CpuPanelKernels, ABadCoefficientIsRefusedAtEveryLevel) {
   }
 }
 
+// Halves of integers are ties: with coefficients of +-1/2 every output whose terms sum to an odd
+// number rounds a tie (to even), about half the rows, in both of a 9-output combination's groups
+// of 8 lanes, with and without bases.
+TEST(CpuPanelKernels, TiesRoundToEvenAtEveryLevel) {
+  constexpr std::size_t n = 512;
+  const Panel<fx::Q32> start = make_panel(n, std::vector<int>(16, 40), 11);
+  std::vector<std::uint32_t> outs(9), terms = {10, 11, 12};
+  std::iota(outs.begin(), outs.end(), 0u);
+  std::vector<double> coef(terms.size() * outs.size());
+  for (std::size_t k = 0; k < coef.size(); ++k) coef[k] = (k % 3 == 1) ? -0.5 : 0.5;
+  for (const bool with_bases : {false, true}) {
+    const std::vector<std::uint32_t> bases = with_bases ? outs : std::vector<std::uint32_t>{};
+    Panel<fx::Q32> want = start;
+    PanelOps<fx::Q32>(n, 9, false, 48).combine(want, outs, bases, terms, coef);
+    std::size_t ties = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      std::int64_t s = 0;
+      for (const std::uint32_t t : terms) s += start.at(i, t).raw;
+      ties += (s & 1) != 0;
+    }
+    EXPECT_GT(ties, n / 4);
+    for (const Simd lv : levels()) {
+      Panel<fx::Q32> got = start;
+      make_panel_kernels(n, 9, false, 48, lv)->combine(got, outs, bases, terms, coef);
+      for (std::size_t i = 0; i < n; ++i)
+        for (const std::uint32_t c : outs) ASSERT_EQ(got.at(i, c).raw, want.at(i, c).raw) << simd_name(lv) << " row " << i << " output " << c;
+    }
+  }
+}
+
 // A combined entry beyond 64 bits is refused at every level, as the portable kernel refuses it:
 // 520 terms of 2^51 - 1 (the vector path's largest entry) with coefficients just below 8 sum to
 // about 2^63.02. One output (one lane) and nine (a second vector of lanes) overflow in row 5 only.
