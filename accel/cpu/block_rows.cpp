@@ -20,6 +20,7 @@
 #include "r1/accel/cpu/panel_kernels.hpp"
 #include "r1/solvers/exact_round.hpp"
 #include "r1/solvers/panel.hpp"
+#include "wide_lanes.hpp"
 
 namespace r1::accel::cpu {
 namespace {
@@ -36,36 +37,38 @@ struct RowSums {
   std::uint64_t bits[kLanes];
 };
 
-// GCC 12 reports the masked and shift intrinsics' undefined pass-through operand as
-// (maybe-)uninitialized (a false positive inside avx512fintrin.h), as in panel_kernels.cpp.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#endif
+R1_MASKED_SHIFT_WARNING_OFF
+// Entries [k0, k1) of a row for the block columns c0 .. (the lanes `mask` sets): the low and high
+// 52 bits of M_ik x'_k added to lo and hi (at most kFlush entries between widenings), the
+// gathered entries' magnitude bits OR-ed into bits.
+__attribute__((target("avx512f,avx512ifma"), always_inline)) inline void ifma_entries(
+    const std::uint32_t* col, const fx::Q32* m, std::uint64_t k0, std::uint64_t k1, std::uint64_t nnz, const fx::Q32* x,
+    std::size_t ld, std::size_t c0, __mmask8 mask, __m512i& lo, __m512i& hi, __m512i& bits) {
+  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
+  for (std::uint64_t k = k0; k < k1; ++k) {
+    if (k + kAhead < nnz) {
+      const fx::Q32* ahead = x + static_cast<std::size_t>(col[k + kAhead]) * ld + c0;
+      _mm_prefetch(reinterpret_cast<const char*>(ahead), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(ahead + kLanes - 1), _MM_HINT_T0);
+    }
+    const __m512i v = _mm512_maskz_loadu_epi64(mask, &x[static_cast<std::size_t>(col[k]) * ld + c0].raw);
+    const __m512i xo = _mm512_maskz_add_epi64(mask, v, off);
+    bits = _mm512_or_si512(bits, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
+    const __m512i mk = _mm512_set1_epi64(static_cast<long long>(m[k].raw));
+    lo = _mm512_madd52lo_epu64(lo, xo, mk);
+    hi = _mm512_madd52hi_epu64(hi, xo, mk);
+  }
+}
+
 // Entries [b, e) of one row for the block columns c0 .. (the lanes `mask` sets): the lane sums of
 // M x' widened into `s`, and the OR of the gathered entries' magnitude bits per lane.
 __attribute__((target("avx512f,avx512ifma"))) void ifma_row(const std::uint32_t* col, const fx::Q32* m, std::uint64_t b,
                                                              std::uint64_t e, std::uint64_t nnz, const fx::Q32* x,
                                                              std::size_t ld, std::size_t c0, __mmask8 mask, RowSums& s) {
-  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
   __m512i bits = _mm512_setzero_si512();
   for (std::uint64_t k0 = b; k0 < e; k0 += kFlush) {
-    const std::uint64_t k1 = std::min<std::uint64_t>(e, k0 + kFlush);
     __m512i lo = _mm512_setzero_si512(), hi = _mm512_setzero_si512();
-    for (std::uint64_t k = k0; k < k1; ++k) {
-      if (k + kAhead < nnz) {
-        const fx::Q32* ahead = x + static_cast<std::size_t>(col[k + kAhead]) * ld + c0;
-        _mm_prefetch(reinterpret_cast<const char*>(ahead), _MM_HINT_T0);
-        _mm_prefetch(reinterpret_cast<const char*>(ahead + kLanes - 1), _MM_HINT_T0);
-      }
-      const __m512i v = _mm512_maskz_loadu_epi64(mask, &x[static_cast<std::size_t>(col[k]) * ld + c0].raw);
-      const __m512i xo = _mm512_maskz_add_epi64(mask, v, off);
-      bits = _mm512_or_si512(bits, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
-      const __m512i mk = _mm512_set1_epi64(static_cast<long long>(m[k].raw));
-      lo = _mm512_madd52lo_epu64(lo, xo, mk);
-      hi = _mm512_madd52hi_epu64(hi, xo, mk);
-    }
+    ifma_entries(col, m, k0, std::min<std::uint64_t>(e, k0 + kFlush), nnz, x, ld, c0, mask, lo, hi, bits);
     alignas(64) std::uint64_t l[kLanes], h[kLanes];
     _mm512_store_si512(l, lo);
     _mm512_store_si512(h, hi);
@@ -78,6 +81,7 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_row(const std::uint32_t*
   _mm512_store_si512(bl, bits);
   for (std::size_t c = 0; c < kLanes; ++c) s.bits[c] = bl[c];
 }
+
 // A whole row for a block of at most 8 columns (the lanes `mask` sets) when its entries fit one
 // lane flush (e - b <= kFlush) and no rank-one term enters: the lane sums of ifma_row, then per
 // lane apply_block's numerator x_i 2^32 - (LO + 2^52 HI - 2^51 msum), formed modulo 2^128 as two
@@ -88,53 +92,24 @@ __attribute__((target("avx512f,avx512ifma"))) bool ifma_row_rounded(const std::u
                                                                      std::uint64_t e, std::uint64_t nnz, const fx::Q32* x,
                                                                      std::size_t ld, std::size_t i, __mmask8 mask, u128 msum,
                                                                      fx::Q32* y) {
-  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
-  const __m512i one = _mm512_set1_epi64(1);
   __m512i bits = _mm512_setzero_si512(), lo = _mm512_setzero_si512(), hi = _mm512_setzero_si512();
-  for (std::uint64_t k = b; k < e; ++k) {
-    if (k + kAhead < nnz) {
-      const fx::Q32* ahead = x + static_cast<std::size_t>(col[k + kAhead]) * ld;
-      _mm_prefetch(reinterpret_cast<const char*>(ahead), _MM_HINT_T0);
-      _mm_prefetch(reinterpret_cast<const char*>(ahead + kLanes - 1), _MM_HINT_T0);
-    }
-    const __m512i v = _mm512_maskz_loadu_epi64(mask, &x[static_cast<std::size_t>(col[k]) * ld].raw);
-    const __m512i xo = _mm512_maskz_add_epi64(mask, v, off);
-    bits = _mm512_or_si512(bits, _mm512_xor_si512(v, _mm512_srai_epi64(v, 63)));
-    const __m512i mk = _mm512_set1_epi64(static_cast<long long>(m[k].raw));
-    lo = _mm512_madd52lo_epu64(lo, xo, mk);
-    hi = _mm512_madd52hi_epu64(hi, xo, mk);
-  }
+  ifma_entries(col, m, b, e, nnz, x, ld, 0, mask, lo, hi, bits);
   if (_mm512_test_epi64_mask(_mm512_srli_epi64(bits, kOffsetBits), _mm512_set1_epi64(-1)) != 0) return false;
-  // MX = LO + 2^52 HI - 2^51 msum (the sum of M x over the row), then T = x_i 2^32 - MX.
-  __m512i mlo = _mm512_add_epi64(lo, _mm512_slli_epi64(hi, 52));
-  __m512i mhi = _mm512_srli_epi64(hi, 12);
-  mhi = _mm512_mask_add_epi64(mhi, _mm512_cmplt_epu64_mask(mlo, lo), mhi, one);
-  const u128 ms = msum << kOffsetBits;
-  const __m512i sl = _mm512_set1_epi64(static_cast<long long>(static_cast<std::uint64_t>(ms)));
-  const __m512i sh = _mm512_set1_epi64(static_cast<long long>(static_cast<std::uint64_t>(ms >> 64)));
-  __m512i t = _mm512_sub_epi64(mlo, sl);
-  mhi = _mm512_sub_epi64(mhi, sh);
-  mhi = _mm512_mask_sub_epi64(mhi, _mm512_cmplt_epu64_mask(mlo, sl), mhi, one);
-  mlo = t;
+  // T = x_i 2^32 - MX with MX = LO + 2^52 HI - 2^51 msum (the sum of M x over the row).
   const __m512i xi = _mm512_maskz_loadu_epi64(mask, &x[i * ld].raw);
-  const __m512i xl = _mm512_slli_epi64(xi, 32), xh = _mm512_srai_epi64(xi, 32);
-  const __m512i tlo = _mm512_sub_epi64(xl, mlo);
-  __m512i thi = _mm512_sub_epi64(xh, mhi);
-  thi = _mm512_mask_sub_epi64(thi, _mm512_cmplt_epu64_mask(xl, mlo), thi, one);
-  // RNE(T / 2^32), ties to the even quotient; it fits 64 bits when thi lies in [-2^31, 2^31).
-  const __m512i q = _mm512_or_si512(_mm512_srli_epi64(tlo, 32), _mm512_slli_epi64(thi, 32));
-  const __m512i rem = _mm512_and_si512(tlo, _mm512_set1_epi64(0xFFFFFFFFLL));
-  const __m512i half = _mm512_set1_epi64(std::int64_t{1} << 31);
-  const __mmask8 up = _mm512_cmpgt_epu64_mask(rem, half) | (_mm512_cmpeq_epu64_mask(rem, half) & _mm512_test_epi64_mask(q, one));
-  const __mmask8 fits = _mm512_cmpeq_epu64_mask(_mm512_srli_epi64(_mm512_add_epi64(thi, half), 32), _mm512_setzero_si512());
-  const __mmask8 wraps = _mm512_cmpeq_epu64_mask(q, _mm512_set1_epi64(INT64_MAX)) & up;
-  if (((~fits | wraps) & mask) != 0) return false;
-  _mm512_mask_storeu_epi64(&y->raw, mask, _mm512_mask_add_epi64(q, up, q, one));
+  const u128 ms = msum << kOffsetBits;
+  Wide t{_mm512_slli_epi64(xi, 32), _mm512_srai_epi64(xi, 32)};
+  t = wide_sub(t, lo, _mm512_setzero_si512());
+  t = wide_sub(t, _mm512_slli_epi64(hi, 52), _mm512_srli_epi64(hi, 12));
+  t = wide_add(t, _mm512_set1_epi64(static_cast<long long>(static_cast<std::uint64_t>(ms))),
+               _mm512_set1_epi64(static_cast<long long>(static_cast<std::uint64_t>(ms >> 64))));
+  __mmask8 ok = 0;
+  const __m512i r = wide_rne_shift<32>(t, ok);
+  if ((static_cast<__mmask8>(~ok) & mask) != 0) return false;
+  _mm512_mask_storeu_epi64(&y->raw, mask, r);
   return true;
 }
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
+R1_MASKED_SHIFT_WARNING_ON
 
 class IfmaRows final : public spectral::BlockRows {
  public:

@@ -30,19 +30,8 @@
 #include <vector>
 
 #include "r1/solvers/exact_round.hpp"
+#include "wide_lanes.hpp"
 
-// GCC 12 reports the shift builtins' undefined pass-through operand as (maybe-)uninitialized (a
-// false positive inside avx512fintrin.h; every lane of a shift is defined). Clang has no such
-// warning group.
-#if defined(__GNUC__) && !defined(__clang__)
-#define R1_MASKED_SHIFT_WARNING_OFF                                                      \
-  _Pragma("GCC diagnostic push") _Pragma("GCC diagnostic ignored \"-Wmaybe-uninitialized\"") \
-      _Pragma("GCC diagnostic ignored \"-Wuninitialized\"")
-#define R1_MASKED_SHIFT_WARNING_ON _Pragma("GCC diagnostic pop")
-#else
-#define R1_MASKED_SHIFT_WARNING_OFF
-#define R1_MASKED_SHIFT_WARNING_ON
-#endif
 
 namespace r1::accel::cpu {
 
@@ -133,9 +122,29 @@ std::vector<TermRun> term_runs(Cols terms) {
 constexpr std::size_t kChunk = 2048;
 constexpr std::size_t kMaxGroup = 8;  // block columns per pass over the chunk: 16 accumulators
 
+// A list in panel order, so that its runs are as long as they can be: a step's list is the
+// trivial column, the locked columns in eigenvalue order and the basis, which in panel order is
+// one run (the near list two). order[k] is the list position of cols[k], the k-th column in that
+// order. Formed once per call of dots(), not per row block.
+struct PanelOrder {
+  std::vector<std::uint32_t> order, cols;
+  std::vector<TermRun> runs;  // cols as runs of consecutive columns
+};
+
+PanelOrder panel_order(Cols qs) {
+  PanelOrder o;
+  o.order.resize(qs.size());
+  std::iota(o.order.begin(), o.order.end(), 0u);
+  std::stable_sort(o.order.begin(), o.order.end(), [&qs](std::uint32_t a, std::uint32_t b) { return qs[a] < qs[b]; });
+  o.cols.resize(qs.size());
+  for (std::size_t k = 0; k < qs.size(); ++k) o.cols[k] = qs[o.order[k]];
+  o.runs = term_runs(o.cols);
+  return o;
+}
+
 struct IfmaDots {
   std::size_t nq = 0, nq_pad = 0, nw = 0;
-  std::vector<TermRun> runs;          // qs as runs of consecutive columns
+  const std::vector<TermRun>* runs = nullptr;  // the list as runs of consecutive columns
   std::vector<std::int64_t> xt;       // the tile's list entries, row-major (kTile x nq_pad)
   std::vector<std::uint64_t> wt;      // chunk rows x nw: w + 2^51
   std::vector<std::uint64_t> lo, hi;  // [c * nq_pad + q]: the pair's lane sums
@@ -201,7 +210,7 @@ void ifma_dots_chunk(const Panel<fx::Q32>& p, Cols ws, std::size_t r0, std::size
     for (std::size_t r = 0; r < tr; ++r) {
       const fx::Q32* row = p.row(r0 + t0 + r);
       std::int64_t* dst = d.xt.data() + r * d.nq_pad;
-      for (const TermRun& run : d.runs) std::memcpy(dst + run.at, &row[run.col].raw, run.count * sizeof(std::int64_t));
+      for (const TermRun& run : *d.runs) std::memcpy(dst + run.at, &row[run.col].raw, run.count * sizeof(std::int64_t));
       std::uint64_t* wr = d.wt.data() + (t0 + r) * d.nw;
       for (std::size_t c = 0; c < d.nw; ++c) {
         const std::int64_t v = row[ws[c]].raw;
@@ -366,44 +375,20 @@ R1_MASKED_SHIFT_WARNING_OFF
 __attribute__((target("avx512f"))) bool ifma_round8(const std::uint64_t* sums, std::size_t np, std::size_t og, std::size_t no,
                                                     const std::uint64_t* k_lo, const std::uint64_t* k_hi, std::uint64_t xsum,
                                                     const std::int64_t* base, std::int64_t* out) {
-  const __m512i one = _mm512_set1_epi64(1);
   const __m512i l0 = _mm512_loadu_si512(sums + og), h0 = _mm512_loadu_si512(sums + np + og);
   const __m512i l1 = _mm512_loadu_si512(sums + 2 * np + og), h1 = _mm512_loadu_si512(sums + 3 * np + og);
   const __m512i b = _mm512_add_epi64(h0, l1);
-  __m512i lo = _mm512_add_epi64(l0, _mm512_slli_epi64(b, 52));
-  __m512i hi = _mm512_add_epi64(_mm512_srli_epi64(b, 12), _mm512_slli_epi64(h1, 40));
-  hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(lo, l0), hi, one);
-  // + (nt 2^114 - 2^51 sum c')
-  __m512i t = _mm512_add_epi64(lo, _mm512_loadu_si512(k_lo + og));
-  hi = _mm512_add_epi64(hi, _mm512_loadu_si512(k_hi + og));
-  hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(t, lo), hi, one);
-  lo = t;
-  // - 2^63 sum x'
-  const __m512i xl = _mm512_set1_epi64(static_cast<long long>(xsum << 63));
-  const __m512i xh = _mm512_set1_epi64(static_cast<long long>(xsum >> 1));
-  t = _mm512_sub_epi64(lo, xl);
-  hi = _mm512_sub_epi64(hi, xh);
-  hi = _mm512_mask_sub_epi64(hi, _mm512_cmplt_epu64_mask(lo, xl), hi, one);
-  lo = t;
+  Wide t{l0, _mm512_slli_epi64(h1, 40)};  // L0 + 2^104 H1
+  t = wide_add(t, _mm512_slli_epi64(b, 52), _mm512_srli_epi64(b, 12));   // + 2^52 (H0 + L1)
+  t = wide_add(t, _mm512_loadu_si512(k_lo + og), _mm512_loadu_si512(k_hi + og));  // + nt 2^114 - 2^51 sum c'
+  t = wide_sub(t, _mm512_set1_epi64(static_cast<long long>(xsum << 63)), _mm512_set1_epi64(static_cast<long long>(xsum >> 1)));  // - 2^63 sum x'
   if (base != nullptr) {  // + base 2^60, sign-extended
     const __m512i bv = _mm512_loadu_si512(base + og);
-    t = _mm512_add_epi64(lo, _mm512_slli_epi64(bv, 60));
-    hi = _mm512_add_epi64(hi, _mm512_srai_epi64(bv, 4));
-    hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(t, lo), hi, one);
-    lo = t;
+    t = wide_add(t, _mm512_slli_epi64(bv, 60), _mm512_srai_epi64(bv, 4));
   }
-  // q = floor(T / 2^60); ties to the even q.
-  const __m512i q = _mm512_or_si512(_mm512_srli_epi64(lo, 60), _mm512_slli_epi64(hi, 4));
-  const __m512i rem = _mm512_and_si512(lo, _mm512_set1_epi64((std::int64_t{1} << 60) - 1));
-  const __m512i half = _mm512_set1_epi64(std::int64_t{1} << 59);
-  const __mmask8 up = _mm512_cmpgt_epu64_mask(rem, half) |
-                      (_mm512_cmpeq_epu64_mask(rem, half) & _mm512_test_epi64_mask(q, one));
-  // T / 2^60 fits 64 bits when hi lies in [-2^59, 2^59); q + 1 then overflows only from 2^63 - 1.
-  const __mmask8 fits = _mm512_cmpeq_epu64_mask(_mm512_srli_epi64(_mm512_add_epi64(hi, half), 60), _mm512_setzero_si512());
-  const __mmask8 wraps = _mm512_cmpeq_epu64_mask(q, _mm512_set1_epi64(INT64_MAX)) & up;
-  _mm512_storeu_si512(out + og, _mm512_mask_add_epi64(q, up, q, one));
-  const __mmask8 lanes = tail_mask(no - og);
-  return ((~fits | wraps) & lanes) == 0;
+  __mmask8 ok = 0;
+  _mm512_storeu_si512(out + og, wide_rne_shift<60>(t, ok));
+  return (static_cast<__mmask8>(~ok) & tail_mask(no - og)) == 0;
 }
 R1_MASKED_SHIFT_WARNING_ON
 
@@ -457,7 +442,7 @@ class CpuPanelOps final : public PanelOps<fx::Q32> {
  private:
   void avx2_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
                       std::vector<FastExact>& acc) const;
-  void ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, IfmaDots& d,
+  void ifma_block_sum(const Panel<fx::Q32>& p, const PanelOrder& qs, Cols ws, std::size_t lo, std::size_t hi, IfmaDots& d,
                       std::vector<FastExact>& acc) const;
   Simd level_;
 };
@@ -496,20 +481,13 @@ void CpuPanelOps::avx2_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
     }
 }
 
-void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, IfmaDots& d,
-                                 std::vector<FastExact>& acc) const {
-  const std::size_t nq = qs.size(), nw = ws.size();
+void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, const PanelOrder& qs, Cols ws, std::size_t lo, std::size_t hi,
+                                 IfmaDots& d, std::vector<FastExact>& acc) const {
+  const std::size_t nq = qs.cols.size(), nw = ws.size();
   d.nq = nq;
   d.nw = nw;
   d.nq_pad = (nq + 7) / 8 * 8;
-  // The list in panel order, so that its runs are as long as they can be: a step's list is the
-  // trivial column, the locked columns in eigenvalue order and the basis, which in panel order
-  // is one run (the near list two). order[k] is the list position of the k-th column in that order.
-  std::vector<std::uint32_t> order(nq), cols(nq);
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&qs](std::uint32_t a, std::uint32_t b) { return qs[a] < qs[b]; });
-  for (std::size_t k = 0; k < nq; ++k) cols[k] = qs[order[k]];
-  d.runs = term_runs(cols);
+  d.runs = &qs.runs;
   for (std::size_t r0 = lo; r0 < hi; r0 += kChunk) {
     const std::size_t rows = std::min(kChunk, hi - r0);
     d.wt.resize(rows * nw);
@@ -525,14 +503,14 @@ void CpuPanelOps::ifma_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std:
     const u128 rows_kk = static_cast<u128>(rows) << 102;
     for (std::size_t q = 0; q < nq; ++q)
       for (std::size_t c = 0; c < nw; ++c) {
-        const std::size_t k = order[q] * nw + c;
+        const std::size_t k = qs.order[q] * nw + c;
         if (((d.xbits[q] | d.wbits[c]) >> kOffsetBits) == 0) {
           const std::size_t l = c * d.nq_pad + q;
           const u128 t = static_cast<u128>(d.lo[l]) + (static_cast<u128>(d.hi[l]) << 52) -
                          ((static_cast<u128>(d.xsum[q]) + d.wsum[c]) << kOffsetBits) + rows_kk;
           acc[k].add(static_cast<i128>(t));
         } else {
-          exact_pair(p, cols[q], ws[c], r0, r0 + rows, acc[k]);
+          exact_pair(p, qs.cols[q], ws[c], r0, r0 + rows, acc[k]);
         }
       }
   }
@@ -543,11 +521,12 @@ void CpuPanelOps::dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<doub
   spectral::check_dots(p.rows(), size(), p.cols(), qs, ws, out.size());
   if (out.empty()) return;
   // The scratch lives per row block (a few KB against 4096 rows of products).
+  const PanelOrder order = level_ == Simd::kAvx512Ifma ? panel_order(qs) : PanelOrder{};
   spectral::exact_dots(size(), parallel(), 2 * frac_bits() + scale_exponent(), out,
                        [&](std::size_t lo, std::size_t hi, std::vector<FastExact>& acc) {
                          if (level_ == Simd::kAvx512Ifma) {
                            IfmaDots d;
-                           ifma_block_sum(p, qs, ws, lo, hi, d, acc);
+                           ifma_block_sum(p, order, ws, lo, hi, d, acc);
                          } else {
                            Scratch s;
                            avx2_block_sum(p, qs, ws, lo, hi, s, acc);
