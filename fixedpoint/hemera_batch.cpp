@@ -31,10 +31,9 @@ std::size_t full_blocks(std::size_t len) { return len / RATE_BYTES; }
 template <std::size_t L>
 void sponge_lanes(const Input* in, std::size_t blocks, Digest* out) {
   State st[L] = {};  // domain tag 0 (plain hash): the all-zero state
-  for (std::size_t b = 0; b < blocks; ++b) {
-    for (std::size_t k = 0; k < L; ++k) absorb_rate(st[k], in[k].data + b * RATE_BYTES);
-    permute_lanes<L>(st);
-  }
+  const std::uint8_t* data[L];
+  for (std::size_t k = 0; k < L; ++k) data[k] = in[k].data;
+  absorb_blocks<L>(st, data, blocks);
   for (std::size_t k = 0; k < L; ++k) {
     const std::size_t done = blocks * RATE_BYTES;
     absorb_final(st[k], in[k].data + done, in[k].len - done, in[k].len);

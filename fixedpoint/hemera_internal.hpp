@@ -70,45 +70,75 @@ using gl::mask_of;
   return s + epsilon_if(s < c);
 }
 
-// x^(p-2) by the addition chain of gl::pow_p_minus_2 (63 squarings, 8 multiplications).
-[[gnu::always_inline]] inline u64 pow_p_minus_2(u64 x) {
-  auto sq = [](u64 a, int n) {
-    for (int j = 0; j < n; ++j) a = mul(a, a);
-    return a;
+// x_c^(p-2) for C independent values by the addition chain of gl::pow_p_minus_2 (63 squarings,
+// 8 multiplications). Each step is taken for all C values before the next, so the C dependency
+// chains interleave: one chain is bound by the multiplication's latency, several share it.
+template <std::size_t C>
+[[gnu::always_inline]] inline void pow_p_minus_2_n(u64 (&x)[C]) {
+  using V = u64[C];
+  auto sq = [](V& a, int n) {
+    for (int j = 0; j < n; ++j)
+      for (std::size_t c = 0; c < C; ++c) a[c] = mul(a[c], a[c]);
   };
-  const u64 e1 = x;
-  const u64 e3 = mul(sq(mul(sq(e1, 1), e1), 1), e1);  // x^(2^3 - 1)
-  const u64 e6 = mul(sq(e3, 3), e3);                   // x^(2^6 - 1)
-  const u64 e12 = mul(sq(e6, 6), e6);                  // x^(2^12 - 1)
-  const u64 e24 = mul(sq(e12, 12), e12);               // x^(2^24 - 1)
-  const u64 e30 = mul(sq(e24, 6), e6);                 // x^(2^30 - 1)
-  const u64 e31 = mul(sq(e30, 1), e1);                 // x^(2^31 - 1)
-  const u64 b = sq(e31, 1);                            // x^(2^32 - 2)
-  return mul(sq(b, 32), mul(b, e1));                   // x^((2^32 - 2) 2^32 + 2^32 - 1)
+  auto times = [](V& a, const V& b) {
+    for (std::size_t c = 0; c < C; ++c) a[c] = mul(a[c], b[c]);
+  };
+  auto copy = [](V& a, const V& b) {
+    for (std::size_t c = 0; c < C; ++c) a[c] = b[c];
+  };
+  V e1, e3, e6, e12, e24, t;
+  copy(e1, x);
+  copy(e3, e1), sq(e3, 1), times(e3, e1), sq(e3, 1), times(e3, e1);  // x^(2^3 - 1)
+  copy(e6, e3), sq(e6, 3), times(e6, e3);                            // x^(2^6 - 1)
+  copy(e12, e6), sq(e12, 6), times(e12, e6);                         // x^(2^12 - 1)
+  copy(e24, e12), sq(e24, 12), times(e24, e12);                      // x^(2^24 - 1)
+  copy(t, e24), sq(t, 6), times(t, e6);                              // x^(2^30 - 1)
+  sq(t, 1), times(t, e1);                                            // x^(2^31 - 1)
+  sq(t, 1);                                                          // b = x^(2^32 - 2)
+  copy(x, t), times(x, e1);                                          // b x
+  sq(t, 32), times(x, t);                                            // b^(2^32) b x
 }
 
-// x_k^(p-2) for L lanes with one field inversion (Montgomery's trick): prefix products, one
-// x^(p-2) of the last prefix, then a backward pass peels off each lane's inverse: 71 + 3 (L - 1)
-// multiplications instead of 71 L. x^(p-2) maps 0 to 0 but 0 has no inverse, and one zero lane
-// would zero the whole product: each zero is replaced by 1 for the product and its result masked
+[[gnu::always_inline]] inline u64 pow_p_minus_2(u64 x) {
+  u64 v[1] = {x};
+  pow_p_minus_2_n<1>(v);
+  return v[0];
+}
+
+// x_k^(p-2) for C M lanes with C field inversions (Montgomery's trick on each run of M lanes:
+// lanes c M .. c M + M - 1 form chain c): prefix products, one x^(p-2) of each chain's last
+// prefix, then a backward pass peels off each lane's inverse: 71 C + 3 (M - 1) C multiplications
+// instead of 71 C M. The C chains run interleaved (pow_p_minus_2_n), which hides most of the
+// multiplication's latency. x^(p-2) maps 0 to 0 but 0 has no inverse, and one zero lane would
+// zero its chain's product: each zero is replaced by 1 for the product and its result masked
 // back to 0, branch-free.
+template <std::size_t C, std::size_t M>
+[[gnu::always_inline]] inline void invert_chains(u64* x) {
+  u64 a[C][M], keep[C][M], prefix[C][M], inv[C];
+  for (std::size_t c = 0; c < C; ++c)
+    for (std::size_t k = 0; k < M; ++k) {
+      const u64 v = gl::canonical(x[c * M + k]);  // the one representative of zero is 0 after this
+      const bool zero = v == 0;
+      a[c][k] = v | static_cast<u64>(zero);
+      keep[c][k] = mask_of(!zero);
+    }
+  for (std::size_t c = 0; c < C; ++c) prefix[c][0] = a[c][0];
+  for (std::size_t k = 1; k < M; ++k)
+    for (std::size_t c = 0; c < C; ++c) prefix[c][k] = mul(prefix[c][k - 1], a[c][k]);
+  for (std::size_t c = 0; c < C; ++c) inv[c] = prefix[c][M - 1];
+  pow_p_minus_2_n<C>(inv);  // (a_0 ... a_{M-1})^-1 of each chain
+  for (std::size_t k = M - 1; k > 0; --k)
+    for (std::size_t c = 0; c < C; ++c) {
+      x[c * M + k] = mul(inv[c], prefix[c][k - 1]) & keep[c][k];  // a_k^-1 = (a_0 ... a_k)^-1 (a_0 ... a_{k-1})
+      inv[c] = mul(inv[c], a[c][k]);                             // (a_0 ... a_{k-1})^-1
+    }
+  for (std::size_t c = 0; c < C; ++c) x[c * M] = inv[c] & keep[c][0];
+}
+
+// All L lanes as one chain.
 template <std::size_t L>
 [[gnu::always_inline]] inline void invert_lanes(u64 (&x)[L]) {
-  u64 a[L], keep[L], prefix[L];
-  for (std::size_t k = 0; k < L; ++k) {
-    const u64 c = gl::canonical(x[k]);  // the one representative of zero is 0 after this
-    const bool zero = c == 0;
-    a[k] = c | static_cast<u64>(zero);
-    keep[k] = mask_of(!zero);
-  }
-  prefix[0] = a[0];
-  for (std::size_t k = 1; k < L; ++k) prefix[k] = mul(prefix[k - 1], a[k]);
-  u64 inv = pow_p_minus_2(prefix[L - 1]);  // (a_0 ... a_{L-1})^-1
-  for (std::size_t k = L - 1; k > 0; --k) {
-    x[k] = mul(inv, prefix[k - 1]) & keep[k];  // a_k^-1 = (a_0 ... a_k)^-1 (a_0 ... a_{k-1})
-    inv = mul(inv, a[k]);                      // (a_0 ... a_{k-1})^-1
-  }
-  x[0] = inv & keep[0];
+  invert_chains<1, L>(x);
 }
 
 }  // namespace lazy
@@ -118,25 +148,32 @@ template <std::size_t L>
 template <std::size_t L>
 void permute_lanes(State* states);
 
-// Cuts n independent items into lockstep groups: LANES wide, then 8, 4, 2, 1 for the rest (the
+// Cuts n independent items into lockstep groups: LANES wide, then 32, 16, 8, 4, 2, 1 for the rest (the
 // lane counts permute_lanes is built for); one at a time when `batching` is off. Calls
-// run(std::integral_constant<std::size_t, L>, first) per group. A remainder is not padded to 16
-// lanes: a padded batch costs 16 states of work, while narrower groups cost in proportion (per
-// state, measured: 16 lanes 1.9 us, 8 2.2, 4 2.6, 2 3.4, 1 5.1).
+// run(std::integral_constant<std::size_t, L>, first) per group. A remainder is not padded to a
+// full group: a padded batch costs LANES states of work, while narrower groups cost in
+// proportion.
 template <class Run>
 void split_lanes(std::size_t n, bool batching, Run&& run) {
-  static_assert(LANES == 16, "split_lanes and the permute_lanes instantiations assume 16 lanes");
+  static_assert(LANES == 64, "split_lanes and the permute_lanes instantiations assume 64 lanes");
   std::size_t i = 0;
   if (!batching) {
     for (; i < n; ++i) run(std::integral_constant<std::size_t, 1>{}, i);
     return;
   }
-  for (; n - i >= 16; i += 16) run(std::integral_constant<std::size_t, 16>{}, i);
+  for (; n - i >= 64; i += 64) run(std::integral_constant<std::size_t, 64>{}, i);
+  if (n - i >= 32) run(std::integral_constant<std::size_t, 32>{}, i), i += 32;
+  if (n - i >= 16) run(std::integral_constant<std::size_t, 16>{}, i), i += 16;
   if (n - i >= 8) run(std::integral_constant<std::size_t, 8>{}, i), i += 8;
   if (n - i >= 4) run(std::integral_constant<std::size_t, 4>{}, i), i += 4;
   if (n - i >= 2) run(std::integral_constant<std::size_t, 2>{}, i), i += 2;
   if (n - i >= 1) run(std::integral_constant<std::size_t, 1>{}, i);
 }
+
+// R1-HASH-004's loop for L sponges in lockstep: `blocks` full 56-byte blocks of each data[k]
+// absorbed into st[k], the states permuted after each block. Leaves the states canonical.
+template <std::size_t L>
+void absorb_blocks(State* st, const std::uint8_t* const* data, std::size_t blocks);
 
 // Permutes n independent states: lanes of LANES while batching is on, then smaller lane counts
 // for the rest; one state at a time while it is off.

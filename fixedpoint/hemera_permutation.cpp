@@ -177,6 +177,93 @@ R1_AVX512 void partial_round(State* st, std::size_t r) {
   }
 }
 
+// Element-major rounds (R1-HASH-023): vector i holds element i of eight states, so the external
+// matrix and the partial rounds' sums are vector additions, and a partial round's S-box inputs of
+// all lanes sit side by side for the shared inversion. Values are any 64-bit representatives of
+// their residues, not the scalar rounds' representatives; every state leaves canonical, so the
+// output is the same.
+
+// A sum of a few 64-bit values kept as the sums of their 32-bit halves: value = lo + hi 2^32.
+// Up to 64 summands below 2^32 each stay below 2^38 in a 64-bit lane, so no addition carries.
+struct Halves {
+  __m512i lo, hi;
+};
+
+R1_AVX512 Halves halves(__m512i x) { return {_mm512_and_si512(x, splat(0xFFFFFFFFull)), _mm512_srli_epi64(x, 32)}; }
+
+R1_AVX512 Halves operator+(Halves a, Halves b) { return {_mm512_add_epi64(a.lo, b.lo), _mm512_add_epi64(a.hi, b.hi)}; }
+
+// lo + hi 2^32 (lo, hi < 2^38) to a representative below 2^64: hi 2^32 = (hi mod 2^32) 2^32 +
+// (hi >> 32) 2^64, and 2^64 = EPSILON. Each of the two additions may carry once; the wrapped sum
+// is then below 2^38, so adding the EPSILON the carry is worth cannot carry again.
+R1_AVX512 __m512i combine(Halves v) {
+  const __m512i eps = splat(gl::EPSILON);
+  const __m512i shifted = _mm512_slli_epi64(v.hi, 32);
+  __m512i x = _mm512_add_epi64(v.lo, shifted);
+  x = _mm512_mask_add_epi64(x, _mm512_cmplt_epu64_mask(x, shifted), x, eps);
+  const __m512i top = _mm512_srli_epi64(v.hi, 32);
+  const __m512i t = _mm512_sub_epi64(_mm512_slli_epi64(top, 32), top);  // top EPSILON < 2^38
+  const __m512i y = _mm512_add_epi64(x, t);
+  return _mm512_mask_add_epi64(y, _mm512_cmplt_epu64_mask(y, t), y, eps);
+}
+
+// The external matrix on the sixteen element vectors: each output sums at most 35 inputs.
+R1_AVX512 void external_soa(__m512i* s) {
+  Halves t[WIDTH];
+  for (std::size_t g = 0; g < 4; ++g) {
+    const Halves a = halves(s[4 * g]), b = halves(s[4 * g + 1]), c = halves(s[4 * g + 2]), d = halves(s[4 * g + 3]);
+    const Halves sum = (a + b) + (c + d);
+    t[4 * g + 0] = sum + a + (b + b);  // 2a + 3b + c + d
+    t[4 * g + 1] = sum + b + (c + c);  // a + 2b + 3c + d
+    t[4 * g + 2] = sum + c + (d + d);  // a + b + 2c + 3d
+    t[4 * g + 3] = sum + d + (a + a);  // 3a + b + c + 2d
+  }
+  for (std::size_t j = 0; j < 4; ++j) {
+    const Halves col = (t[j] + t[4 + j]) + (t[8 + j] + t[12 + j]);
+    for (std::size_t g = 0; g < 4; ++g) s[4 * g + j] = combine(t[4 * g + j] + col);
+  }
+}
+
+R1_AVX512 void full_round_soa(__m512i* s, std::size_t r) {
+  for (std::size_t i = 0; i < WIDTH; ++i) {
+    const __m512i x = add_canonical(s[i], splat(kRoundFull[WIDTH * r + i]));
+    const __m512i x2 = mul(x, x);
+    s[i] = mul(mul(x2, x), mul(x2, x2));
+  }
+  external_soa(s);
+}
+
+// One partial round on V groups of eight states: the S-box inputs of all 8 V lanes are inverted
+// together (lazy::invert_chains: up to four interleaved chains), while each group's sum of
+// elements 1..15 is formed.
+template <std::size_t V>
+R1_AVX512 void partial_round_soa(__m512i (*s)[WIDTH], std::size_t r) {
+  constexpr std::size_t C = V < 4 ? V : 4;
+  alignas(64) u64 x[8 * V];
+  Halves rest[V];
+  const __m512i c = splat(kRoundPartial[r]);
+  for (std::size_t g = 0; g < V; ++g) {
+    _mm512_store_si512(x + 8 * g, add_canonical(s[g][0], c));
+    Halves acc = halves(s[g][1]);
+    for (std::size_t i = 2; i < WIDTH; ++i) acc = acc + halves(s[g][i]);
+    rest[g] = acc;
+  }
+  lazy::invert_chains<C, 8 * V / C>(x);
+  for (std::size_t g = 0; g < V; ++g) {
+    const __m512i inv = _mm512_load_si512(x + 8 * g);
+    const __m512i sum = combine(rest[g] + halves(inv));  // sixteen summands
+    s[g][0] = inv;
+    for (std::size_t i = 0; i < WIDTH; ++i) {
+      // d_i x_i + sum < 2^128: the product's high word is at most 2^64 - 2.
+      __m512i lo, hi;
+      product(splat(kInternalDiag[i]), s[g][i], lo, hi);
+      lo = _mm512_add_epi64(lo, sum);
+      hi = _mm512_mask_add_epi64(hi, _mm512_cmplt_epu64_mask(lo, sum), hi, splat(1));
+      s[g][i] = reduce(lo, hi);
+    }
+  }
+}
+
 #undef R1_AVX512
 
 }  // namespace avx
@@ -191,6 +278,75 @@ __attribute__((target("avx512f"))) void permute_avx512(State* st) {
     for (std::size_t k = 0; k < L; ++k) avx::full_round(st[k], r);
   for (std::size_t k = 0; k < L; ++k)
     for (std::size_t i = 0; i < WIDTH; ++i) st[k][i] = gl::canonical(st[k][i]);
+}
+
+// The rounds of R1-HASH-002 on V groups of eight element-major states.
+template <std::size_t V>
+__attribute__((target("avx512f"), always_inline)) inline void rounds_soa(__m512i (*s)[WIDTH]) {
+  for (std::size_t g = 0; g < V; ++g) avx::external_soa(s[g]);
+  for (std::size_t r = 0; r < 4; ++r)
+    for (std::size_t g = 0; g < V; ++g) avx::full_round_soa(s[g], r);
+  for (std::size_t r = 0; r < 16; ++r) avx::partial_round_soa<V>(s, r);
+  for (std::size_t r = 4; r < 8; ++r)
+    for (std::size_t g = 0; g < V; ++g) avx::full_round_soa(s[g], r);
+}
+
+static_assert(sizeof(State) == WIDTH * sizeof(u64), "states are laid out back to back");
+
+// Element i of states 8 g .. 8 g + 7 as one vector, and back (made canonical).
+__attribute__((target("avx512f"), always_inline)) inline __m512i state_index() {
+  return _mm512_setr_epi64(0, 16, 32, 48, 64, 80, 96, 112);
+}
+
+template <std::size_t V>
+__attribute__((target("avx512f"), always_inline)) inline void load_soa(const State* st, __m512i (*s)[WIDTH]) {
+  for (std::size_t g = 0; g < V; ++g)
+    for (std::size_t i = 0; i < WIDTH; ++i) s[g][i] = _mm512_i64gather_epi64(state_index(), st[8 * g].data() + i, 8);
+}
+
+template <std::size_t V>
+__attribute__((target("avx512f"), always_inline)) inline void store_soa(__m512i (*s)[WIDTH], State* st) {
+  const __m512i p = avx::splat(gl::P), eps = avx::splat(gl::EPSILON);
+  for (std::size_t g = 0; g < V; ++g)
+    for (std::size_t i = 0; i < WIDTH; ++i) {
+      const __m512i v = s[g][i];
+      const __m512i canon = _mm512_mask_add_epi64(v, _mm512_cmpge_epu64_mask(v, p), v, eps);  // v - p
+      _mm512_i64scatter_epi64(st[8 * g].data() + i, state_index(), canon, 8);
+    }
+}
+
+template <std::size_t V>
+__attribute__((target("avx512f"))) void permute_soa(State* st) {
+  __m512i s[V][WIDTH];
+  load_soa<V>(st, s);
+  rounds_soa<V>(s);
+  store_soa<V>(s, st);
+}
+
+// R1-HASH-004 for 8 V sponges at once: `blocks` full blocks of each input absorbed and permuted,
+// the states element-major from the first block to the last. Rate element i of a block is bytes
+// 7 i .. 7 i + 6, read as the 8-byte word at 7 i - 1 shifted down by a byte (at 0 for element 0,
+// masked to 56 bits), so no read leaves the block.
+template <std::size_t V>
+__attribute__((target("avx512f"))) void absorb_soa(State* st, const std::uint8_t* const* data, std::size_t blocks) {
+  __m512i s[V][WIDTH];
+  __m512i base[V];
+  for (std::size_t g = 0; g < V; ++g) base[g] = _mm512_loadu_si512(data + 8 * g);  // the lanes' addresses
+  load_soa<V>(st, s);
+  const __m512i low56 = avx::splat((std::uint64_t{1} << 56) - 1);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    for (std::size_t g = 0; g < V; ++g) {
+      const __m512i block = _mm512_add_epi64(base[g], avx::splat(b * RATE_BYTES));
+      for (std::size_t i = 0; i < RATE; ++i) {
+        const __m512i at = _mm512_add_epi64(block, avx::splat(i == 0 ? 0 : 7 * i - 1));
+        const __m512i word = _mm512_i64gather_epi64(at, nullptr, 1);
+        const __m512i chunk = i == 0 ? _mm512_and_si512(word, low56) : _mm512_srli_epi64(word, 8);
+        s[g][i] = avx::add_canonical(s[g][i], chunk);  // chunk < 2^56 < p
+      }
+    }
+    rounds_soa<V>(s);
+  }
+  store_soa<V>(s, st);
 }
 
 #if defined(__GNUC__) && !defined(__clang__)
@@ -216,7 +372,10 @@ template <std::size_t L>
 void permute_lanes(State* st) {
   if constexpr (L > 1) g_lane_batches.fetch_add(1, std::memory_order_relaxed);
 #if R1_HEMERA_AVX512
-  if (g_has_avx512 && g_vector.load(std::memory_order_relaxed)) return permute_avx512<L>(st);
+  if (g_has_avx512 && g_vector.load(std::memory_order_relaxed)) {
+    if constexpr (L % 8 == 0) return permute_soa<L / 8>(st);
+    else return permute_avx512<L>(st);
+  }
 #endif
   // Inputs may be any 64-bit words: every lazy operation accepts any representative.
   for (std::size_t k = 0; k < L; ++k) external(st[k]);
@@ -235,6 +394,32 @@ template void permute_lanes<2>(State*);
 template void permute_lanes<4>(State*);
 template void permute_lanes<8>(State*);
 template void permute_lanes<16>(State*);
+template void permute_lanes<32>(State*);
+template void permute_lanes<64>(State*);
+
+template <std::size_t L>
+void absorb_blocks(State* st, const std::uint8_t* const* data, std::size_t blocks) {
+#if R1_HEMERA_AVX512
+  if constexpr (L % 8 == 0) {
+    if (g_has_avx512 && g_vector.load(std::memory_order_relaxed)) {
+      if (blocks > 0) g_lane_batches.fetch_add(1, std::memory_order_relaxed);
+      return absorb_soa<L / 8>(st, data, blocks);
+    }
+  }
+#endif
+  for (std::size_t b = 0; b < blocks; ++b) {
+    for (std::size_t k = 0; k < L; ++k) absorb_rate(st[k], data[k] + b * RATE_BYTES);
+    permute_lanes<L>(st);
+  }
+}
+
+template void absorb_blocks<1>(State*, const std::uint8_t* const*, std::size_t);
+template void absorb_blocks<2>(State*, const std::uint8_t* const*, std::size_t);
+template void absorb_blocks<4>(State*, const std::uint8_t* const*, std::size_t);
+template void absorb_blocks<8>(State*, const std::uint8_t* const*, std::size_t);
+template void absorb_blocks<16>(State*, const std::uint8_t* const*, std::size_t);
+template void absorb_blocks<32>(State*, const std::uint8_t* const*, std::size_t);
+template void absorb_blocks<64>(State*, const std::uint8_t* const*, std::size_t);
 
 void permute_states(State* st, std::size_t n) {
   split_lanes(n, g_batching.load(std::memory_order_relaxed),

@@ -323,6 +323,20 @@ TEST(HemeraLazy, InvertLanesHandlesZeroLanes) {
   }
 }
 
+TEST(HemeraLazy, InterleavedChainsInvertEveryLane) {
+  // Four chains of sixteen lanes (the 64-lane partial round), zeros in the first and last lane of
+  // a chain, a whole chain zero, and chains that share no zero: each lane is its own x^(p-2).
+  std::uint64_t x[64], want[64];
+  const std::vector<std::vector<std::size_t>> zero_sets = {{}, {0}, {15, 16}, {63}, {32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47}};
+  for (std::size_t t = 0; t < zero_sets.size(); ++t) {
+    for (std::size_t k = 0; k < 64; ++k) x[k] = 0xD6E8FEB86659FD93ull * (k + 1 + 64 * t) + (k % 5 == 0 ? gl::P : 0);
+    for (std::size_t z : zero_sets[t]) x[z] = (z % 2 == 0) ? 0 : gl::P;
+    for (std::size_t k = 0; k < 64; ++k) want[k] = gl::pow_p_minus_2(Fp::from_u64(x[k])).v;
+    hm::detail::lazy::invert_chains<4, 16>(x);
+    for (std::size_t k = 0; k < 64; ++k) EXPECT_EQ(gl::canonical(x[k]), want[k]) << "set " << t << " lane " << k;
+  }
+}
+
 RC_GTEST_PROP(Hemera, PermuteMatchesReference, ()) {
   const hm::State s = *any_state();
   hm::State fast = s;
@@ -331,8 +345,8 @@ RC_GTEST_PROP(Hemera, PermuteMatchesReference, ()) {
 }
 
 RC_GTEST_PROP(Hemera, PermuteManyMatchesScalar, ()) {
-  // Any count: 16-lane groups plus 8, 4, 2, 1 for the rest.
-  const auto count = *rc::gen::inRange<std::size_t>(0, 40);
+  // Any count: 64-lane groups plus 32, 16, 8, 4, 2, 1 for the rest.
+  const auto count = *rc::gen::inRange<std::size_t>(0, 200);
   const auto states = *rc::gen::container<std::vector<hm::State>>(count, any_state());
   std::vector<hm::State> batched = states;
   const std::uint64_t before = hm::detail::lane_batches();
@@ -346,14 +360,15 @@ RC_GTEST_PROP(Hemera, PermuteManyMatchesScalar, ()) {
 }
 
 // R1-HASH-023: the AVX-512 rounds are the scalar rounds, for one state and in lanes, on any
-// words (edgy ones included: p, p - 1, 2^64 - 1, 0, ...), the batch sizes 1 to 16 and more.
+// words (edgy ones included: p, p - 1, 2^64 - 1, 0, ...), the batch sizes 1 to 64 and more; and
+// the element-major sponge (hash_many) is the one-state-at-a-time scalar sponge.
 
 RC_GTEST_PROP(Hemera, VectorRoundsAreTheScalarRounds, ()) {
   {
     VectorRounds on(true);
     if (!hm::vector_rounds()) RC_SUCCEED("this CPU has no AVX-512: the scalar rounds are the only ones");
   }
-  const auto count = *rc::gen::inRange<std::size_t>(1, 40);
+  const auto count = *rc::gen::inRange<std::size_t>(1, 200);
   const auto states = *rc::gen::container<std::vector<hm::State>>(count, any_state());
   std::vector<hm::State> vec = states, scalar = states;
   {
@@ -372,10 +387,10 @@ RC_GTEST_PROP(Hemera, VectorRoundsAreTheScalarRounds, ()) {
 }
 
 TEST(Hemera, ZeroSboxInputInLanes) {
-  // States whose partial-round S-box input is exactly 0, in chosen lanes of 16-, 8-, 4- and 2-lane
-  // groups, among ordinary states; and every lane zero in the same round.
+  // States whose partial-round S-box input is exactly 0, in chosen lanes of 64-, 32-, 16-, 8-, 4-
+  // and 2-lane groups, among ordinary states; and every lane zero in the same round.
   for (std::size_t round : {0u, 6u, 15u}) {
-    for (std::size_t n : {16u, 15u, 2u}) {
+    for (std::size_t n : {64u, 63u, 16u, 15u, 2u}) {
       for (const std::vector<std::size_t>& zero_lanes :
            std::vector<std::vector<std::size_t>>{{0}, {n - 1}, {n / 2}, {0, n - 1}, {}}) {
         std::vector<hm::State> states(n);
@@ -445,6 +460,32 @@ RC_GTEST_PROP(Hemera, HashManyEqualsHash, (const std::vector<Bytes>& some)) {
   std::vector<hm::Digest> got(inputs.size());
   hm::hash_many(spans, got, *rc::gen::arbitrary<bool>());
   for (std::size_t i = 0; i < inputs.size(); ++i) RC_ASSERT(got[i] == hm::hash(inputs[i]));
+}
+
+TEST(Hemera, ElementMajorSpongeEqualsOneStateSponge) {
+  // 75 inputs of each of three block counts (0, 2 and 73 full blocks): 64-lane groups with 8- and
+  // 2-lane rests. Bytes of 0xFF make rate chunks of 2^56 - 1 and carry the field additions; each
+  // input has its own bytes so that a lane reading its neighbour's data shows.
+  std::vector<Bytes> inputs;
+  for (const std::size_t base : {0u, 112u, 4088u})
+    for (std::size_t k = 0; k < 75; ++k) {
+      Bytes b(base + (k * 7) % 56);
+      for (std::size_t j = 0; j < b.size(); ++j)
+        b[j] = (k % 3 == 0) ? 0xFF : static_cast<std::uint8_t>((j * 131 + k * 29 + base) >> (j % 3));
+      inputs.push_back(std::move(b));
+    }
+  std::vector<hm::Digest> want(inputs.size());
+  {
+    VectorRounds off(false);
+    for (std::size_t i = 0; i < inputs.size(); ++i) want[i] = hm::hash(inputs[i]);
+  }
+  std::vector<std::span<const std::uint8_t>> spans(inputs.begin(), inputs.end());
+  for (const bool vector : {true, false}) {
+    VectorRounds v(vector);
+    std::vector<hm::Digest> got(inputs.size());
+    hm::hash_many(spans, got, false);
+    for (std::size_t i = 0; i < inputs.size(); ++i) EXPECT_EQ(got[i], want[i]) << "input " << i << " vector " << vector;
+  }
 }
 
 TEST(Hemera, HashManyStringsEqualsHash) {

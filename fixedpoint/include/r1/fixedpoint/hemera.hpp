@@ -21,9 +21,10 @@ inline constexpr std::size_t RATE_BYTES = 56;      // 8 elements x 7 bytes
 inline constexpr std::size_t DIGEST_BYTES = 32;    // elements 0..3, 8 bytes little-endian each
 inline constexpr std::size_t CHUNK_BYTES = 4096;   // tree-mode leaf size
 // States permuted in lockstep by the batched paths: they fill the pipeline with independent
-// multiplications and share one field inversion per partial round. Measured per state on
-// x86-64: 8 lanes 2.2 us, 16 lanes 1.9 us, 32 lanes 1.8 us (R1-HASH-020).
-inline constexpr std::size_t LANES = 16;
+// multiplications and share field inversions per partial round. Measured per state on x86-64
+// with AVX-512 (element-major rounds, R1-HASH-023): 8 lanes 1.09 us, 64 lanes 0.81 us; scalar
+// rounds 1.83 and 1.51 us (R1-HASH-020).
+inline constexpr std::size_t LANES = 64;
 
 using State = std::array<std::uint64_t, WIDTH>;
 using Digest = std::array<std::uint8_t, DIGEST_BYTES>;
