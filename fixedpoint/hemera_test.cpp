@@ -324,7 +324,7 @@ TEST(HemeraLazy, InvertLanesHandlesZeroLanes) {
 }
 
 TEST(HemeraLazy, InterleavedChainsInvertEveryLane) {
-  // Four chains of sixteen lanes (the 64-lane partial round), zeros in the first and last lane of
+  // Two chains of 32 lanes (the 64-lane partial round) and four of 16, zeros in the first and last lane of
   // a chain, a whole chain zero, and chains that share no zero: each lane is its own x^(p-2).
   std::uint64_t x[64], want[64];
   const std::vector<std::vector<std::size_t>> zero_sets = {{}, {0}, {15, 16}, {63}, {32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47}};
@@ -332,8 +332,12 @@ TEST(HemeraLazy, InterleavedChainsInvertEveryLane) {
     for (std::size_t k = 0; k < 64; ++k) x[k] = 0xD6E8FEB86659FD93ull * (k + 1 + 64 * t) + (k % 5 == 0 ? gl::P : 0);
     for (std::size_t z : zero_sets[t]) x[z] = (z % 2 == 0) ? 0 : gl::P;
     for (std::size_t k = 0; k < 64; ++k) want[k] = gl::pow_p_minus_2(Fp::from_u64(x[k])).v;
-    hm::detail::lazy::invert_chains<4, 16>(x);
+    std::uint64_t y[64];
+    std::copy(x, x + 64, y);
+    hm::detail::lazy::invert_chains<2, 32>(x);
+    hm::detail::lazy::invert_chains<4, 16>(y);
     for (std::size_t k = 0; k < 64; ++k) EXPECT_EQ(gl::canonical(x[k]), want[k]) << "set " << t << " lane " << k;
+    for (std::size_t k = 0; k < 64; ++k) EXPECT_EQ(gl::canonical(y[k]), want[k]) << "set " << t << " lane " << k;
   }
 }
 

@@ -22,8 +22,8 @@ inline constexpr std::size_t DIGEST_BYTES = 32;    // elements 0..3, 8 bytes lit
 inline constexpr std::size_t CHUNK_BYTES = 4096;   // tree-mode leaf size
 // States permuted in lockstep by the batched paths: they fill the pipeline with independent
 // multiplications and share field inversions per partial round. Measured per state on x86-64
-// with AVX-512 (element-major rounds, R1-HASH-023): 8 lanes 1.09 us, 64 lanes 0.81 us; scalar
-// rounds 1.83 and 1.51 us (R1-HASH-020).
+// with AVX-512 (element-major rounds, R1-HASH-023): 8 lanes 1.10 us, 64 lanes 0.76 us; scalar
+// rounds 1.96 and 1.56 us (R1-HASH-020).
 inline constexpr std::size_t LANES = 64;
 
 using State = std::array<std::uint64_t, WIDTH>;
