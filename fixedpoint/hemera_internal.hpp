@@ -171,7 +171,8 @@ void split_lanes(std::size_t n, bool batching, Run&& run) {
 }
 
 // R1-HASH-004's loop for L sponges in lockstep: `blocks` full 56-byte blocks of each data[k]
-// absorbed into st[k], the states permuted after each block. Leaves the states canonical.
+// absorbed into st[k], the states permuted after each block (so canonical when blocks > 0;
+// untouched when blocks = 0, as for inputs shorter than one block).
 template <std::size_t L>
 void absorb_blocks(State* st, const std::uint8_t* const* data, std::size_t blocks);
 

@@ -401,8 +401,8 @@ template <std::size_t L>
 void absorb_blocks(State* st, const std::uint8_t* const* data, std::size_t blocks) {
 #if R1_HEMERA_AVX512
   if constexpr (L % 8 == 0) {
-    if (g_has_avx512 && g_vector.load(std::memory_order_relaxed)) {
-      if (blocks > 0) g_lane_batches.fetch_add(1, std::memory_order_relaxed);
+    if (blocks > 0 && g_has_avx512 && g_vector.load(std::memory_order_relaxed)) {
+      g_lane_batches.fetch_add(1, std::memory_order_relaxed);
       return absorb_soa<L / 8>(st, data, blocks);
     }
   }
