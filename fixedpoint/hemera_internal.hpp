@@ -148,8 +148,8 @@ template <std::size_t L>
 template <std::size_t L>
 void permute_lanes(State* states);
 
-// Cuts n independent items into lockstep groups: LANES wide, then 32, 16, 8, 4, 2, 1 for the rest (the
-// lane counts permute_lanes is built for); one at a time when `batching` is off. Calls
+// Cuts n independent items into lockstep groups: LANES wide, then 32, 16, 8, 4, 2, 1 for the
+// rest (the lane counts permute_lanes is built for); one at a time when `batching` is off. Calls
 // run(std::integral_constant<std::size_t, L>, first) per group. A remainder is not padded to a
 // full group: a padded batch costs LANES states of work, while narrower groups cost in
 // proportion.
