@@ -4,6 +4,7 @@
 #include "kd_tree.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -15,7 +16,8 @@ namespace r1::hier {
 namespace {
 
 // Leaves hold at most this many points: small enough that a leaf scan is cheap, large enough
-// that the tree has few nodes (about 2n / 16). It shapes only the search, never its answer.
+// that the tree has few nodes (about 2n / 16). It shapes only the search, never its answer. A
+// leaf's alive points are a 16-bit mask in its node.
 constexpr std::uint32_t kLeafSize = 16;
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 // Cell faces that no split made. Valid coordinates have |c| <= 2^60 (R1-HIER-003), so these never
@@ -59,6 +61,7 @@ constexpr std::uint32_t kParallelBuildMin = 1u << 14;
 KdTree::KdTree(std::span<const Point> points, bool parallel) : points_(points.begin(), points.end()) {
   const auto n = static_cast<std::uint32_t>(points_.size());
   leaf_of_.assign(n, 0);
+  slot_of_.assign(n, 0);
   alive_.assign(n, 1);
   if (n == 0) return;
   const std::uint32_t count = subtree_nodes(n);
@@ -88,7 +91,6 @@ std::uint32_t KdTree::build(Ranked* work, std::uint32_t self, std::uint32_t pare
                             std::uint32_t begin, std::uint32_t end, bool parallel) {
   Node node;
   node.begin = begin;
-  node.end = end;
   cells_[self] = cell;
   parent_[self] = parent;
   // The bounding box of the points.
@@ -101,7 +103,11 @@ std::uint32_t KdTree::build(Ranked* work, std::uint32_t self, std::uint32_t pare
     }
   }
   if (end - begin <= kLeafSize) {
-    for (std::uint32_t i = begin; i < end; ++i) leaf_of_[work[i].rank] = self;
+    node.count = static_cast<std::uint16_t>(end - begin);
+    for (std::uint32_t i = begin; i < end; ++i) {
+      leaf_of_[work[i].rank] = self;
+      slot_of_[work[i].rank] = static_cast<std::uint8_t>(i - begin);
+    }
     nodes_[self] = node;
     return self;
   }
@@ -140,6 +146,7 @@ void KdTree::reset() {
   for (std::size_t i = nodes_.size(); i-- > 0;) {
     Node& nd = nodes_[i];
     if (nd.right == 0) {
+      nd.alive_mask = static_cast<std::uint16_t>((1u << nd.count) - 1);
       refresh_leaf(nd);
     } else {
       nd.min_alive = std::min(nodes_[i + 1].min_alive, nodes_[nd.right].min_alive);
@@ -149,8 +156,8 @@ void KdTree::reset() {
 
 void KdTree::refresh_leaf(Node& leaf) {
   leaf.min_alive = kNone;
-  for (std::uint32_t j = leaf.begin; j < leaf.end; ++j)
-    if (alive_[perm_[j]] != 0) leaf.min_alive = std::min(leaf.min_alive, perm_[j]);
+  for (unsigned mask = leaf.alive_mask; mask != 0; mask &= mask - 1)
+    leaf.min_alive = std::min(leaf.min_alive, perm_[leaf.begin + static_cast<unsigned>(std::countr_zero(mask))]);
 }
 
 void KdTree::remove(std::uint32_t item) {
@@ -161,6 +168,7 @@ void KdTree::remove(std::uint32_t item) {
   // no search enters an empty subtree.
   std::uint32_t node = leaf_of_[item];
   Node& leaf = nodes_[node];
+  leaf.alive_mask = static_cast<std::uint16_t>(leaf.alive_mask & ~(1u << slot_of_[item]));
   if (leaf.min_alive != item) return;
   refresh_leaf(leaf);
   while (node != 0 && nodes_[node].min_alive == kNone) {
@@ -220,16 +228,15 @@ void KdTree::search(std::uint32_t node, Query& query) {
   Node& nd = nodes_[node];
   if (nd.right == 0) {
     std::uint32_t lowest = kNone;
-    for (std::uint32_t j = nd.begin; j < nd.end; ++j) {
+    for (unsigned mask = nd.alive_mask; mask != 0; mask &= mask - 1) {
+      const std::uint32_t j = nd.begin + static_cast<unsigned>(std::countr_zero(mask));
       const std::uint32_t item = perm_[j];
-      if (alive_[item] != 0) {
-        lowest = std::min(lowest, item);
-        if (item == query.skip) continue;
-        const u128 d2 = d2_of(query.q, perm_points_[j]);
-        // Beyond the radius, or behind the k-th best: not an answer (offer would refuse it).
-        if (d2 > query.bound()) continue;
-        offer(query, d2, item);
-      }
+      lowest = std::min(lowest, item);
+      if (item == query.skip) continue;
+      const u128 d2 = d2_of(query.q, perm_points_[j]);
+      // Beyond the radius, or behind the k-th best: not an answer (offer would refuse it).
+      if (d2 > query.bound()) continue;
+      offer(query, d2, item);
     }
     if constexpr (kTighten) nd.min_alive = lowest;  // the scan makes the leaf's bound exact
     return;
@@ -259,9 +266,10 @@ std::vector<u128> KdTree::nearest_other_lower_bounds(bool parallel) const {
   auto leaf = [&](std::size_t node) {
     const Node& nd = nodes_[node];
     if (nd.right != 0) return;
-    for (std::uint32_t j = nd.begin; j < nd.end; ++j) {
+    const std::uint32_t end = nd.begin + nd.count;
+    for (std::uint32_t j = nd.begin; j < end; ++j) {
       u128 best = face_distance2(perm_points_[j], cells_[node]);
-      for (std::uint32_t i = nd.begin; i < nd.end; ++i)
+      for (std::uint32_t i = nd.begin; i < end; ++i)
         if (i != j) best = std::min(best, d2_of(perm_points_[j], perm_points_[i]));
       out[perm_[j]] = best;
     }

@@ -37,6 +37,9 @@ class KdTree {
   void reset();
   bool alive(std::uint32_t item) const { return alive_[item] != 0; }
   std::uint32_t alive_count() const { return alive_count_; }
+  // The leaf that holds point `item`: leaves are numbered in tree order, so items sorted by it are
+  // near one another in space.
+  std::uint32_t leaf_of(std::uint32_t item) const { return leaf_of_[item]; }
   // Marks an alive point dead: O(1), the nodes above learn it lazily (see Node::min_alive).
   void remove(std::uint32_t item);
 
@@ -61,15 +64,20 @@ class KdTree {
  private:
   // One cache line.
   struct alignas(64) Node {
-    Point lo{}, hi{};                  // bounding box of the node's points (all, alive or not)
-    std::uint32_t begin = 0, end = 0;  // range in perm_
-    std::uint32_t right = 0;           // right child; the left child is the next node; 0: a leaf
+    Point lo{}, hi{};          // bounding box of the node's points (all, alive or not)
+    std::uint32_t begin = 0;   // first position in perm_ of the node's points
+    std::uint32_t right = 0;   // right child; the left child is the next node; 0: a leaf
     // A lower bound on the lowest alive rank below, kNone (all ones) exactly when none is alive.
     // Removing a point leaves the bounds above its leaf as they were (still lower bounds, now
     // possibly loose) unless the leaf empties, which is passed up; a search that visits a node
     // tightens it from its children on the way back.
     std::uint32_t min_alive = 0;
+    // Leaves only: the point count (at most kLeafSize) and which of them are alive (bit i: the
+    // point at perm_[begin + i]), so that a leaf scan reads no per-point flag elsewhere in memory.
+    std::uint16_t count = 0;
+    std::uint16_t alive_mask = 0;
   };
+  static_assert(sizeof(Node) == 64);
 
   // A node's cell: the box its ancestors' split planes cut out (closed; a point of the subtree
   // lies in it, a point outside lies on or beyond one of its faces). kOpen stands for no face.
@@ -116,6 +124,7 @@ class KdTree {
   std::vector<Cell> cells_;              // by node
   std::vector<std::uint32_t> parent_;    // by node (the root's is 0)
   std::vector<std::uint32_t> leaf_of_;  // rank -> leaf node
+  std::vector<std::uint8_t> slot_of_;   // rank -> its bit in the leaf's alive_mask
   std::vector<std::uint8_t> alive_;
   std::uint32_t alive_count_ = 0;
 };

@@ -119,12 +119,19 @@ std::optional<Level> cluster_level(const Items& items, KdTree& tree, u128 r2, st
     // leader asks again. Same clusters as the loop above.
     std::vector<std::uint32_t> window;
     std::vector<std::vector<Hit>> answers(kWindow);
+    std::vector<std::uint64_t> in_tree_order;
     for (std::uint32_t i = 0; i < m;) {
       window.clear();
       for (; i < m && window.size() < kWindow; ++i)
         if (tree.alive(i)) window.push_back(i);
+      // Asked in tree order, so that queries near one another in space run one after another.
+      in_tree_order.resize(window.size());
+      for (std::size_t w = 0; w < window.size(); ++w)
+        in_tree_order[w] = (std::uint64_t{tree.leaf_of(window[w])} << 32) | w;
+      std::sort(in_tree_order.begin(), in_tree_order.end());
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, window.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t w = r.begin(); w < r.end(); ++w) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+          const auto w = static_cast<std::uint32_t>(in_tree_order[k]);
           if (alone(window[w])) {
             answers[w].clear();
           } else {
