@@ -173,6 +173,8 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   std::optional<render::NeuralField> prev_field;
   std::vector<hemera::Digest> prev_ids;
   render::Scene prev_scene;
+  // PREV's files by their tree leaves: the new epoch's digests hash only what changed (R1-EPO-016).
+  EpochLeaves prev_leaves;
   if (c.from.empty()) {
     // The digest now, then the link records go: nothing after the digest and the layout graph
     // reads them, and the spectral stage's basis is the peak they would add to (R1-EPO-005).
@@ -184,7 +186,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   } else {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034).
     const auto t1 = std::chrono::steady_clock::now();
-    R1_ASSIGN(Epoch prev, read_epoch(c.from));
+    R1_ASSIGN(Epoch prev, read_epoch(c.from, &prev_leaves));
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
     const std::string prev_nrf = (std::filesystem::path(c.from) / "field.nrf").string();
@@ -243,6 +245,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     for (auto& f : render::content_epoch_files(*content)) wo.extra.push_back(std::move(f));
   const auto t2 = std::chrono::steady_clock::now();
   wo.timings = !c.no_timings;
+  if (!c.from.empty()) wo.previous = &prev_leaves;
   R1_TRY(write_epoch(e, c.out, wo));
   e.timings.push_back({"write", seconds_since(t2)});
   progress.finish();

@@ -115,10 +115,10 @@ void hash_many_impl(std::size_t n, const Get& get, std::span<Digest> out, bool p
   });
 }
 
-// Leaves [first, first + m) (m <= LANES) of an n-leaf tree: plain digests of their chunks in lanes,
+// Leaves counter[0..m) (m <= LANES) of an n-leaf tree: plain digests of their chunks in lanes,
 // then the binding permutations in lanes. Chunks are grouped by block count: all full chunks share
 // one, and a short chunk (the stream's last) runs in a group of its own.
-void leaf_batch(const Input* chunks, std::size_t m, std::uint64_t first, std::uint64_t n, Digest* out) {
+void leaf_batch(const Input* chunks, std::size_t m, const std::uint64_t* counter, std::uint64_t n, Digest* out) {
   std::size_t order[LANES];
   for (std::size_t j = 0; j < m; ++j) order[j] = j;
   std::stable_sort(order, order + m, [&](std::size_t x, std::size_t y) {
@@ -135,7 +135,7 @@ void leaf_batch(const Input* chunks, std::size_t m, std::uint64_t first, std::ui
   }
   for (std::size_t j = 0; j < m; ++j) plain[order[j]] = digests[j];
   State st[LANES];
-  for (std::size_t j = 0; j < m; ++j) st[j] = leaf_state(plain[j], first + j, n == 1);
+  for (std::size_t j = 0; j < m; ++j) st[j] = leaf_state(plain[j], counter[j], n == 1);
   permute_states(st, m);
   for (std::size_t j = 0; j < m; ++j) out[j] = digest_of(st[j]);
 }
@@ -164,26 +164,56 @@ Digest merge_levels(std::vector<Digest> level, bool parallel) {
   return level[0];
 }
 
-// The tree hash over a chunk source: get(i, scratch) returns chunk i, either pointing into memory
-// it already has or filling the 4096-byte scratch buffer.
+std::uint64_t leaf_count(std::uint64_t total_bytes) {
+  return total_bytes == 0 ? 1 : (total_bytes + CHUNK_BYTES - 1) / CHUNK_BYTES;
+}
+
+// Leaves todo[0..count) of an n-leaf tree over a chunk source (get(i, scratch) returns chunk i,
+// either pointing into memory it already has or filling the 4096-byte scratch buffer), written
+// to leaves[todo[k]], in batches of LANES.
 template <class Source>
-Digest tree_hash_impl(std::uint64_t total_bytes, const Source& get, bool parallel) {
-  const std::uint64_t n = total_bytes == 0 ? 1 : (total_bytes + CHUNK_BYTES - 1) / CHUNK_BYTES;
-  std::vector<Digest> leaves(static_cast<std::size_t>(n));
-  const std::size_t batches = static_cast<std::size_t>((n + LANES - 1) / LANES);
+void hash_leaves(std::uint64_t n, const std::uint64_t* todo, std::size_t count, const Source& get, Digest* leaves,
+                 bool parallel) {
+  const std::size_t batches = (count + LANES - 1) / LANES;
   for_each_index(batches, parallel, [&](std::size_t b) {
     const std::unique_ptr<std::uint8_t[]> scratch(new std::uint8_t[LANES * CHUNK_BYTES]);
-    const std::uint64_t first = static_cast<std::uint64_t>(b) * LANES;
-    const std::size_t m = static_cast<std::size_t>(std::min<std::uint64_t>(LANES, n - first));
+    const std::uint64_t* counter = todo + b * LANES;
+    const std::size_t m = std::min(LANES, count - b * LANES);
     Input in[LANES];
+    Digest out[LANES];
     for (std::size_t j = 0; j < m; ++j) {
-      const std::span<const std::uint8_t> c = get(first + j, scratch.get() + j * CHUNK_BYTES);
+      const std::span<const std::uint8_t> c = get(counter[j], scratch.get() + j * CHUNK_BYTES);
       in[j] = {c.data(), c.size()};
     }
-    leaf_batch(in, m, first, n, leaves.data() + first);
+    leaf_batch(in, m, counter, n, out);
+    for (std::size_t j = 0; j < m; ++j) leaves[counter[j]] = out[j];
   });
-  return merge_levels(std::move(leaves), parallel);
 }
+
+// Every leaf of the tree over a chunk source (see hash_leaves).
+template <class Source>
+std::vector<Digest> all_leaves(std::uint64_t total_bytes, const Source& get, bool parallel) {
+  const std::uint64_t n = leaf_count(total_bytes);
+  std::vector<Digest> leaves(static_cast<std::size_t>(n));
+  std::vector<std::uint64_t> todo(static_cast<std::size_t>(n));
+  for (std::uint64_t i = 0; i < n; ++i) todo[static_cast<std::size_t>(i)] = i;
+  hash_leaves(n, todo.data(), todo.size(), get, leaves.data(), parallel);
+  return leaves;
+}
+
+template <class Source>
+Digest tree_hash_impl(std::uint64_t total_bytes, const Source& get, bool parallel) {
+  return merge_levels(all_leaves(total_bytes, get, parallel), parallel);
+}
+
+// Chunk i of a byte span.
+struct SpanChunks {
+  std::span<const std::uint8_t> data;
+  std::span<const std::uint8_t> operator()(std::uint64_t i, std::uint8_t*) const {
+    const std::size_t off = static_cast<std::size_t>(i) * CHUNK_BYTES;
+    return data.subspan(off, std::min(CHUNK_BYTES, data.size() - off));
+  }
+};
 
 }  // namespace
 
@@ -200,13 +230,39 @@ void hash_many(std::span<const std::string> inputs, std::span<Digest> out, bool 
 }
 
 Digest root_hash(std::span<const std::uint8_t> data, bool parallel) {
-  return tree_hash_impl(
-      data.size(),
-      [&](std::uint64_t i, std::uint8_t*) {
-        const std::size_t off = static_cast<std::size_t>(i) * CHUNK_BYTES;
-        return data.subspan(off, std::min(CHUNK_BYTES, data.size() - off));
-      },
-      parallel);
+  return tree_hash_impl(data.size(), SpanChunks{data}, parallel);
+}
+
+std::vector<Digest> tree_leaves(std::span<const std::uint8_t> data, bool parallel) {
+  return all_leaves(data.size(), SpanChunks{data}, parallel);
+}
+
+std::vector<Digest> tree_leaves_reusing(std::span<const std::uint8_t> data, std::span<const std::uint8_t> previous,
+                                        std::span<const Digest> previous_leaves, bool parallel) {
+  const std::uint64_t n = leaf_count(data.size());
+  std::vector<Digest> leaves(static_cast<std::size_t>(n));
+  std::vector<std::uint64_t> todo;
+  // A leaf digest binds its chunk, its index and whether it is the root (one leaf in all): with
+  // more than one leaf on both sides, equal chunks at one index have equal digests.
+  const bool reuse = n > 1 && previous_leaves.size() > 1 && previous_leaves.size() == leaf_count(previous.size());
+  const SpanChunks now{data}, before{previous};
+  for (std::uint64_t i = 0; i < n; ++i) {
+    if (reuse && i < previous_leaves.size()) {
+      const auto a = now(i, nullptr), b = before(i, nullptr);
+      if (a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin())) {
+        leaves[static_cast<std::size_t>(i)] = previous_leaves[static_cast<std::size_t>(i)];
+        continue;
+      }
+    }
+    todo.push_back(i);
+  }
+  hash_leaves(n, todo.data(), todo.size(), now, leaves.data(), parallel);
+  return leaves;
+}
+
+Digest root_of_leaves(std::vector<Digest> leaves, bool parallel) {
+  assert(!leaves.empty());
+  return merge_levels(std::move(leaves), parallel);
 }
 
 namespace detail {

@@ -533,6 +533,52 @@ TEST(Hemera, TreeMatchesRecursiveDefinitionForEveryLeafCount) {
   }
 }
 
+RC_GTEST_PROP(Hemera, LeavesReusedFromAnEarlierVersionAreTheTreesLeaves, ()) {
+  // An earlier version of 0..40 chunks (a short last chunk or none), then the version now: equal,
+  // bytes changed in place, bytes inserted (every later chunk shifts), cut short or extended.
+  const auto chunks = *rc::gen::inRange<std::size_t>(0, 41);
+  const auto tail = *rc::gen::element<std::size_t>(0, 1, 57, 4095);
+  const Bytes before = pattern(chunks * 4096 + tail, *rc::gen::inRange<std::uint32_t>(0, 1000));
+  Bytes now = before;
+  const int edit = *rc::gen::inRange(0, 5);
+  const std::size_t at = now.empty() ? 0 : *rc::gen::inRange<std::size_t>(0, now.size());
+  if (edit == 1 && !now.empty()) {
+    for (int k = *rc::gen::inRange(1, 6); k > 0; --k) now[*rc::gen::inRange<std::size_t>(0, now.size())] ^= 0x5A;
+  } else if (edit == 2) {
+    now.insert(now.begin() + static_cast<std::ptrdiff_t>(at), *rc::gen::inRange<std::size_t>(1, 9), std::uint8_t{7});
+  } else if (edit == 3) {
+    now.resize(at);
+  } else if (edit == 4) {
+    const Bytes more = pattern(*rc::gen::inRange<std::size_t>(1, 3 * 4096), 77);
+    now.insert(now.end(), more.begin(), more.end());
+  }
+  const std::vector<hm::Digest> prev = hm::tree_leaves(before);
+  const std::vector<hm::Digest> want = hm::tree_leaves(now);
+  RC_ASSERT(hm::tree_leaves_reusing(now, before, prev) == want);
+  RC_ASSERT(hm::root_of_leaves(want) == hm::root_hash(now));
+  RC_ASSERT(hm::root_of_leaves(prev) == hm::root_hash(before));
+  // Leaves of another input (a wrong list) are refused unless their count fits `before`.
+  RC_ASSERT(hm::tree_leaves_reusing(now, before, std::vector<hm::Digest>(prev.size() + 1)) == want);
+}
+
+TEST(Hemera, LeavesAreReusedOnlyWhereTheChunksAreEqual) {
+  // Given stand-in leaves for the earlier version, the equal chunks take the stand-ins (so they
+  // were not hashed again) and the changed ones their own digests.
+  const Bytes before = pattern(10 * 4096 + 100, 5);
+  Bytes now = before;
+  now[3 * 4096 + 17] ^= 1;
+  now[9 * 4096] ^= 1;
+  std::vector<hm::Digest> stand_in(11);
+  for (std::size_t i = 0; i < stand_in.size(); ++i) stand_in[i].fill(static_cast<std::uint8_t>(i + 1));
+  const std::vector<hm::Digest> got = hm::tree_leaves_reusing(now, before, stand_in);
+  const std::vector<hm::Digest> own = hm::tree_leaves(now);
+  ASSERT_EQ(got.size(), 11u);
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i], i == 3 || i == 9 ? own[i] : stand_in[i]) << "leaf " << i;
+  // One leaf on either side: the ROOT flag differs, nothing is taken.
+  const Bytes small = pattern(100, 1);
+  EXPECT_EQ(hm::tree_leaves_reusing(small, small, std::vector<hm::Digest>(1)), hm::tree_leaves(small));
+}
+
 TEST(Hemera, TreeIndependentOfParallelismThreadsAndBatching) {
   const Bytes data = pattern(133 * 4096 + 777, 9);
   const hm::Digest want = hm::root_hash(data, false);

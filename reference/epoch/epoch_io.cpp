@@ -37,8 +37,25 @@ using format::q32_column;
 
 std::string hex(const hemera::Digest& d) { return hemera::to_hex(d); }
 
-std::string file_digest(std::string_view bytes) {
-  return hex(hemera::root_hash(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size())));
+std::span<const std::uint8_t> as_bytes(std::string_view s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+std::string file_digest(std::string_view bytes) { return hex(hemera::root_hash(as_bytes(bytes))); }
+
+// The digest of the epoch file `name` (R1-EPO-016): against the epoch before, when it lists the
+// file and it still opens, only the chunks that differ from it are hashed; the result is
+// file_digest(bytes) either way.
+std::string file_digest(const std::string& name, std::string_view bytes, const EpochLeaves* previous) {
+  if (previous != nullptr) {
+    const auto it = previous->leaves.find(name);
+    if (it != previous->leaves.end()) {
+      auto before = InputFile::open((previous->dir / name).string());
+      if (before.is_ok())
+        return hex(hemera::root_of_leaves(hemera::tree_leaves_reusing(as_bytes(bytes), (*before)->bytes(), it->second)));
+    }
+  }
+  return file_digest(bytes);
 }
 
 const char* role_name(Role r) {
@@ -302,9 +319,10 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
   m["hierarchy"] = {{"tau0", e.hierarchy.tau0}, {"radii", radii}, {"clusters_per_level", counts}};
   json fj = json::object();
   for (const auto& [name, bytes] : files) {
-    fj[name] = {{"bytes", bytes.size()}, {"hemera", file_digest(bytes)}};
-    if (name == "hierarchy.bin") m["topology_digest"] = file_digest(bytes);
-    if (name == "anchor.bin") m["anchor_digest"] = file_digest(bytes);
+    const std::string digest = file_digest(name, bytes, o.previous);
+    fj[name] = {{"bytes", bytes.size()}, {"hemera", digest}};
+    if (name == "hierarchy.bin") m["topology_digest"] = digest;
+    if (name == "anchor.bin") m["anchor_digest"] = digest;
   }
   m["files"] = fj;
   if (e.update) m["update"] = update_json(*e.update);
@@ -355,7 +373,12 @@ class EpochFiles {
  public:
   EpochFiles(fs::path dir, std::size_t n) : dir_(std::move(dir)), n_(n) {}
 
-  Status load(const json& listed) {
+  // `keep`, if given, receives each file's tree leaves (R1-EPO-016).
+  Status load(const json& listed, EpochLeaves* keep) {
+    if (keep) {
+      keep->dir = dir_;
+      keep->leaves.clear();
+    }
     for (const auto& [name, info] : listed.items()) {
       const fs::path p = dir_ / name;
       R1_ASSIGN(auto f, InputFile::open(p.string()));
@@ -363,8 +386,11 @@ class EpochFiles {
       if (f->bytes().size() != bytes)
         return Status::input(p.string() + ": " + std::to_string(f->bytes().size()) + " bytes, the manifest says " +
                              std::to_string(bytes) + " (truncated or replaced?)");
-      if (file_digest(f->text()) != info.at("hemera").get<std::string>())
+      std::vector<hemera::Digest> leaves = hemera::tree_leaves(f->bytes());
+      const std::string digest = hex(hemera::root_of_leaves(leaves));
+      if (digest != info.at("hemera").get<std::string>())
         return Status::input(p.string() + ": Hemera digest differs from the manifest (the file was modified)");
+      if (keep) keep->leaves.emplace(name, std::move(leaves));
       data_.emplace(name, std::move(f));
     }
     return Status::ok();
@@ -434,7 +460,7 @@ Status read_edges(const EpochFiles& files, const fs::path& path, std::size_t n, 
   return Status::ok();
 }
 
-Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
+Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* keep) {
   const std::string manifest = (dir / "manifest.json").string();
   if (m.value("format", "") != kFormat) return Status::input(manifest + ": not an r1 epoch manifest");
   if (m.value("version", 0) != kVersion)
@@ -492,7 +518,7 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
   }
 
   EpochFiles files(dir, n);
-  R1_TRY(files.load(m.at("files")));
+  R1_TRY(files.load(m.at("files"), keep));
   R1_ASSIGN(const std::string_view ids, files.rows("particles.ids", 32));
   e.ids.resize(n);
   for (std::size_t i = 0; i < n; ++i) std::memcpy(e.ids[i].data(), ids.data() + i * 32, 32);
@@ -595,12 +621,12 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m) {
 
 }  // namespace
 
-Result<Epoch> read_epoch(const fs::path& dir) {
+Result<Epoch> read_epoch(const fs::path& dir, EpochLeaves* leaves) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return Status::input(dir.string() + ": not an epoch directory (make one with r1 epoch)");
   R1_ASSIGN(auto mf, InputFile::open((dir / "manifest.json").string()));
   try {
-    return read_epoch_json(dir, json::parse(mf->text()));
+    return read_epoch_json(dir, json::parse(mf->text()), leaves);
   } catch (const json::exception& ex) {
     return Status::input((dir / "manifest.json").string() + ": malformed manifest: " + ex.what());
   }

@@ -104,6 +104,37 @@ TEST(EpochIo, WithoutTimingsEveryByteIsReproducible) {
   EXPECT_EQ(m["files"]["focus.q32"]["bytes"], 5 * 8);
 }
 
+TEST(EpochIo, DigestsAgainstTheEpochBeforeAreTheWholeFilesDigests) {
+  // R1-EPO-016: an epoch of 3000 particles (most files several chunks long), read back with its
+  // leaves, then a next epoch with a few particles moved and one edge more, written with and
+  // without the leaves: the same manifest. Then PREV's positions file is changed on disk after
+  // reading: the comparison is with the bytes there, so the digests still hold.
+  r1::test::TempDir d;
+  r1::EpochWriteOptions quiet;
+  quiet.timings = false;
+  ASSERT_TRUE(r1::write_epoch(synthetic(3000), d / "prev", quiet).is_ok());
+  r1::EpochLeaves leaves;
+  auto prev = r1::read_epoch(d / "prev", &leaves);
+  ASSERT_TRUE(prev.is_ok()) << prev.status().message();
+  EXPECT_EQ(leaves.dir, d / "prev");
+  EXPECT_EQ(leaves.leaves.at("positions.q32").size(), (3000u * 24 + 4095) / 4096);
+  r1::Epoch next = *prev;
+  for (std::size_t i : {5u, 6u, 2500u}) next.frame.position[i][1] = Q32::from_raw(12345);
+  next.edges.insert(next.edges.begin() + 101, {100, 2000, Q32::kOneRaw, 0});  // after (100, 101)
+  r1::EpochWriteOptions against = quiet;
+  against.previous = &leaves;
+  ASSERT_TRUE(r1::write_epoch(next, d / "whole", quiet).is_ok());
+  ASSERT_TRUE(r1::write_epoch(next, d / "reused", against).is_ok());
+  const std::string want = r1::test::read_file(d / "whole/manifest.json");
+  EXPECT_EQ(r1::test::read_file(d / "reused/manifest.json"), want);
+  std::string pos = r1::test::read_file(d / "prev/positions.q32");
+  pos[8 * 24 + 3] ^= 1;
+  r1::test::write_file(d / "prev/positions.q32", pos);
+  fs::remove(d / "prev/focus.q32");
+  ASSERT_TRUE(r1::write_epoch(next, d / "changed", against).is_ok());
+  EXPECT_EQ(r1::test::read_file(d / "changed/manifest.json"), want);
+}
+
 TEST(EpochIo, ModifiedOrTruncatedFilesAreRefused) {
   r1::test::TempDir d;
   ASSERT_TRUE(r1::write_epoch(synthetic(6), d / "ep").is_ok());

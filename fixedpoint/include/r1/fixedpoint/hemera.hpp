@@ -91,6 +91,16 @@ Digest hash_leaf(std::span<const std::uint8_t> chunk, std::uint64_t counter, boo
 Digest hash_node(const Digest& left, const Digest& right, bool is_root);
 Digest root_hash(std::span<const std::uint8_t> data, bool parallel = true);
 
+// The tree by its leaves, for inputs that change in place between versions (epoch files, R1-HASH-013):
+// root_hash(data) == root_of_leaves(tree_leaves(data)). tree_leaves_reusing gives the same leaves,
+// taking leaf i from previous_leaves (the leaves of `previous`) when chunk i of data equals chunk
+// i of previous byte for byte and both have more than one leaf; it hashes only the others.
+std::vector<Digest> tree_leaves(std::span<const std::uint8_t> data, bool parallel = true);
+std::vector<Digest> tree_leaves_reusing(std::span<const std::uint8_t> data, std::span<const std::uint8_t> previous,
+                                        std::span<const Digest> previous_leaves, bool parallel = true);
+// leaves.size() >= 1.
+Digest root_of_leaves(std::vector<Digest> leaves, bool parallel = true);
+
 // Tree hash of a stream whose chunks are produced on demand: chunk(i, out) fills `out` (4096
 // bytes, or fewer for the last chunk) and returns the byte count. Used to hash large record
 // streams without materialising them. `chunk` may be called concurrently for different i.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -13,11 +14,21 @@
 
 namespace r1 {
 
+// The files of an epoch as read (R1-EPO-016): its directory and each listed file's tree leaves
+// (R1-HASH-024), which were checked against the manifest's digest.
+struct EpochLeaves {
+  std::filesystem::path dir;
+  std::map<std::string, std::vector<hemera::Digest>> leaves;
+};
+
 struct EpochWriteOptions {
   bool timings = true;  // R1-EPO-013: false leaves timings_s out so every byte is reproducible
   // Files made beside the stages' (the trained field, R1-NRF-030), by name: written and listed in
   // the manifest like the others.
   std::vector<std::pair<std::string, std::string>> extra;
+  // The epoch before (R1-EPO-016): a file it lists is digested by hashing only the chunks that
+  // differ from its file there. The digests do not depend on it.
+  const EpochLeaves* previous = nullptr;
 };
 
 // The canonical bytes of each output file, by file name (manifest.json excluded).
@@ -26,7 +37,8 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
                            const EpochWriteOptions& o);
 
 Status write_epoch(const Epoch& e, const std::filesystem::path& dir, const EpochWriteOptions& o = {});
-Result<Epoch> read_epoch(const std::filesystem::path& dir);
+// `leaves`, if given, receives the directory and every listed file's tree leaves (R1-EPO-016).
+Result<Epoch> read_epoch(const std::filesystem::path& dir, EpochLeaves* leaves = nullptr);
 
 // Adds (or replaces) the file `name` of an existing epoch directory and lists it in the manifest
 // with its size and digest (R1-NRF-030): the file, then the manifest, each written atomically.
