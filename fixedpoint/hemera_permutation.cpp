@@ -363,7 +363,13 @@ bool cpu_has_avx512() { return false; }
 
 std::atomic<std::uint64_t> g_lane_batches{0};
 std::atomic<bool> g_batching{true};
-const bool g_has_avx512 = cpu_has_avx512();
+// Asked on first use, not in a static initialiser: code that hashes while another translation
+// unit's statics are initialised (a benchmark's registration reading an epoch) must not find it
+// still false, which would run the scalar rounds.
+bool has_avx512() {
+  static const bool has = cpu_has_avx512();
+  return has;
+}
 std::atomic<bool> g_vector{true};
 
 }  // namespace
@@ -372,7 +378,7 @@ template <std::size_t L>
 void permute_lanes(State* st) {
   if constexpr (L > 1) g_lane_batches.fetch_add(1, std::memory_order_relaxed);
 #if R1_HEMERA_AVX512
-  if (g_has_avx512 && g_vector.load(std::memory_order_relaxed)) {
+  if (has_avx512() && g_vector.load(std::memory_order_relaxed)) {
     if constexpr (L % 8 == 0) return permute_soa<L / 8>(st);
     else return permute_avx512<L>(st);
   }
@@ -401,7 +407,7 @@ template <std::size_t L>
 void absorb_blocks(State* st, const std::uint8_t* const* data, std::size_t blocks) {
 #if R1_HEMERA_AVX512
   if constexpr (L % 8 == 0) {
-    if (blocks > 0 && g_has_avx512 && g_vector.load(std::memory_order_relaxed)) {
+    if (blocks > 0 && has_avx512() && g_vector.load(std::memory_order_relaxed)) {
       g_lane_batches.fetch_add(1, std::memory_order_relaxed);
       return absorb_soa<L / 8>(st, data, blocks);
     }
@@ -440,6 +446,6 @@ bool lane_batching() { return detail::g_batching.load(std::memory_order_relaxed)
 
 void set_vector_rounds(bool on) { detail::g_vector.store(on, std::memory_order_relaxed); }
 
-bool vector_rounds() { return detail::g_has_avx512 && detail::g_vector.load(std::memory_order_relaxed); }
+bool vector_rounds() { return detail::has_avx512() && detail::g_vector.load(std::memory_order_relaxed); }
 
 }  // namespace r1::hemera

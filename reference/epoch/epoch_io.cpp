@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -420,8 +421,11 @@ class EpochFiles {
 using format::read_q32_column;
 
 Status read_titles(const InputFile& f, const std::string& where, Epoch& e) {
-  std::map<hemera::Digest, std::size_t> index;
-  for (std::size_t i = 0; i < e.ids.size(); ++i) index.emplace(e.ids[i], i);
+  if (f.bytes().empty()) return Status::ok();  // no titles: no index of 10^6 ids to build
+  // Particle ids in byte order with their index, for the lookups below.
+  std::vector<std::pair<hemera::Digest, std::size_t>> index(e.ids.size());
+  for (std::size_t i = 0; i < e.ids.size(); ++i) index[i] = {e.ids[i], i};
+  std::sort(index.begin(), index.end());
   text::LineReader lines(f.text());
   std::string_view line;
   while (lines.next(line)) {
@@ -431,8 +435,9 @@ Status read_titles(const InputFile& f, const std::string& where, Epoch& e) {
     if (tab == std::string_view::npos || !hemera::from_hex(line.substr(0, tab), id))
       return Status::input(at + "expected a 64-hex id, TAB, title");
     auto title = text::unescape_cell(line.substr(tab + 1));
-    const auto it = index.find(id);
-    if (!title || it == index.end()) return Status::input(at + "title for an unknown particle or with a bad escape");
+    const auto it = std::lower_bound(index.begin(), index.end(), std::make_pair(id, std::size_t{0}));
+    if (!title || it == index.end() || it->first != id)
+      return Status::input(at + "title for an unknown particle or with a bad escape");
     e.titles[it->second] = std::move(*title);
   }
   return Status::ok();

@@ -2,7 +2,7 @@
 // independently of the builder (R1-HIER-002, R1-HIER-013, R1-HIER-015, R1-HIER-022,
 // R1-HIER-040..043).
 #include <algorithm>
-#include <map>
+#include <span>
 #include <numeric>
 #include <string>
 
@@ -25,27 +25,44 @@ Status check_hierarchy(const Hierarchy& h, const std::vector<std::array<Q32, 3>>
   const std::size_t n = pos.size();
   if (phi.size() != n || color.size() != n || ids.size() != n)
     return Status::internal("hierarchy check: input lengths differ");
-  // Canonical particle rank (R1-HIER-012), for the colour tie rule.
+  // Canonical particle rank (R1-HIER-012), for the colour tie rule: phi descending, ties by the
+  // id bytes (their first eight as a big-endian number first, the rest only when those tie).
+  std::vector<std::uint64_t> prefix(n);
+  for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t b = 0; b < 8; ++b) prefix[p] = (prefix[p] << 8) | ids[p][b];
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return phi[a].raw != phi[b].raw ? phi[a].raw > phi[b].raw : ids[a] < ids[b];
+    if (phi[a].raw != phi[b].raw) return phi[a].raw > phi[b].raw;
+    return prefix[a] != prefix[b] ? prefix[a] < prefix[b] : ids[a] < ids[b];
   });
   std::vector<std::size_t> rank(n);
   for (std::size_t r = 0; r < n; ++r) rank[order[r]] = r;
   std::int64_t total_phi = 0;
   for (const Q32 v : phi) total_phi += v.raw;
 
+  std::vector<std::size_t> by_colour;  // one node's members, sorted by colour
   for (std::size_t l = 0; l < h.levels.size(); ++l) {
     const auto& nodes = h.levels[l];
     const auto& of = h.cluster_of[l];
     if (nodes.empty()) return Status::internal("hierarchy check: level " + std::to_string(l) + " is empty");
     if (of.size() != n) return Status::internal("hierarchy check: cluster_of[" + std::to_string(l) + "] has wrong length");
-    // Members of every node from cluster_of, independently of the children lists.
-    std::vector<std::vector<std::size_t>> members(nodes.size());
+    // Members of every node from cluster_of, independently of the children lists: node c's are
+    // flat[start[c], start[c + 1]), ascending.
+    std::vector<std::size_t> start(nodes.size() + 1, 0), flat(n);
     for (std::size_t p = 0; p < n; ++p) {
       if (of[p] >= nodes.size()) return Status::internal("hierarchy check: cluster_of out of range");
-      members[of[p]].push_back(p);
+      ++start[of[p] + 1];
+    }
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    {
+      std::vector<std::size_t> at(start.begin(), start.end() - 1);
+      for (std::size_t p = 0; p < n; ++p) flat[at[of[p]]++] = p;
+    }
+    const auto members = [&](std::size_t c) {
+      return std::span<const std::size_t>(flat.data() + start[c], start[c + 1] - start[c]);
+    };
+    for (std::size_t p = 0; p < n; ++p) {
       if (l + 1 < h.levels.size()) {
         const auto& up = h.cluster_of[l + 1];
         if (up.size() != n || nodes[of[p]].parent != up[p])
@@ -55,7 +72,7 @@ Status check_hierarchy(const Hierarchy& h, const std::vector<std::array<Q32, 3>>
     std::int64_t level_phi = 0;
     for (std::size_t id = 0; id < nodes.size(); ++id) {
       const ClusterNode& node = nodes[id];
-      const auto& mem = members[id];
+      const auto mem = members(id);
       if (node.level != l || node.id != id) return fail(l, id, "wrong level or id field");
       if (mem.empty()) return fail(l, id, "has no particles");
       if (node.children.empty() || node.children.size() > static_cast<std::size_t>(kMaxChildren))
@@ -80,32 +97,46 @@ Status check_hierarchy(const Hierarchy& h, const std::vector<std::array<Q32, 3>>
       if (node.particles != mem.size()) return fail(l, id, "particle count");
       std::array<Q32, 3> lo = pos[mem[0]], hi = pos[mem[0]];
       std::int64_t s = 0;
-      std::map<std::array<std::uint8_t, 3>, std::pair<std::int64_t, std::size_t>> weight;  // colour -> (W, first rank)
+      by_colour.clear();
       for (const std::size_t p : mem) {
         for (std::size_t d = 0; d < 3; ++d) {
           lo[d] = std::min(lo[d], pos[p][d]);
           hi[d] = std::max(hi[d], pos[p][d]);
         }
         s += phi[p].raw;
-        auto [it, fresh] = weight.try_emplace(color[p], 0, rank[p]);
-        it->second.first += phi[p].raw;
-        it->second.second = std::min(it->second.second, rank[p]);
+        by_colour.push_back(p);
       }
       if (lo != node.lo || hi != node.hi) return fail(l, id, "AABB is not the tight box of its particles");
       if (s != node.phi_raw) return fail(l, id, "phi_raw is not the exact sum");
       level_phi += s;
-      auto best = weight.begin();
-      for (auto it = weight.begin(); it != weight.end(); ++it)
-        if (it->second.first > best->second.first ||
-            (it->second.first == best->second.first && it->second.second < best->second.second))
-          best = it;
-      if (best->first != node.color) return fail(l, id, "colour is not the dominant colour");
+      // The dominant colour: the most phi, ties by the colour whose first member comes first in
+      // canonical order (ranks are distinct, so the best is unique).
+      std::sort(by_colour.begin(), by_colour.end(), [&](std::size_t a, std::size_t b) { return color[a] < color[b]; });
+      std::int64_t best_w = -1;
+      std::size_t best_rank = 0;
+      Color best{};
+      for (std::size_t i = 0; i < by_colour.size();) {
+        std::int64_t w = 0;
+        std::size_t first = rank[by_colour[i]];
+        std::size_t j = i;
+        for (; j < by_colour.size() && color[by_colour[j]] == color[by_colour[i]]; ++j) {
+          w += phi[by_colour[j]].raw;
+          first = std::min(first, rank[by_colour[j]]);
+        }
+        if (w > best_w || (w == best_w && first < best_rank)) {
+          best_w = w;
+          best_rank = first;
+          best = color[by_colour[i]];
+        }
+        i = j;
+      }
+      if (best != node.color) return fail(l, id, "colour is not the dominant colour");
       // Canonical order (R1-HIER-013): phi descending, ties by the lowest member id.
       if (id > 0) {
         const ClusterNode& prev = nodes[id - 1];
         const auto lowest = [&](std::size_t k) {
-          ParticleId m = ids[members[k][0]];
-          for (const std::size_t p : members[k]) m = std::min(m, ids[p]);
+          ParticleId m = ids[members(k)[0]];
+          for (const std::size_t p : members(k)) m = std::min(m, ids[p]);
           return m;
         };
         if (prev.phi_raw < node.phi_raw || (prev.phi_raw == node.phi_raw && !(lowest(id - 1) < lowest(id))))
