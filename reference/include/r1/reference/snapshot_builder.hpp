@@ -27,6 +27,9 @@ class SnapshotBuilder {
   std::uint32_t particle_by_id(const ParticleId& id);
   std::uint32_t neuron_by_id(const NeuronId& id);
   std::size_t particle_count() const;
+  // A hint for particle_by_id(id) a few records ahead (speed only): fetches its index slot. Only
+  // once a particle has been numbered (the index is not empty).
+  void prefetch_particle(const ParticleId& id) const { by_id_.prefetch_slot(id); }
 
   // Appends a link; its from/to/neuron are indices returned above. Text inputs leave neuron 0
   // (the all-zero neuron id) and height 1.
