@@ -2,14 +2,20 @@
 #include "r1/spec/snapshot.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 
 namespace r1 {
 
 namespace {
+// The low n bytes of v, little-endian (n <= sizeof(T)); one copy on a little-endian host.
 template <class T>
 void put_le(std::uint8_t* p, T v, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(p, &v, n);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+  }
 }
 }  // namespace
 
@@ -31,7 +37,15 @@ hemera::Digest snapshot_digest(const Snapshot& s) {
   return hemera::root_hash_chunks(total, [&](std::uint64_t chunk, std::span<std::uint8_t> out) {
     const std::size_t first = static_cast<std::size_t>(chunk) * per_chunk;
     const std::size_t last = std::min(s.links.size(), first + per_chunk);
-    for (std::size_t i = first; i < last; ++i) encode_record(s, s.links[i], out.data() + (i - first) * kRecordBytes);
+    // The particle ids are cache misses on large snapshots: those of the record 8 on are fetched
+    // early (speed only).
+    constexpr std::size_t kAhead = 8;
+    for (std::size_t i = first; i < last; ++i) {
+      const Link& ahead = s.links[std::min(i + kAhead, s.links.size() - 1)];
+      __builtin_prefetch(s.particles.data() + ahead.from);
+      __builtin_prefetch(s.particles.data() + ahead.to);
+      encode_record(s, s.links[i], out.data() + (i - first) * kRecordBytes);
+    }
     return (last - first) * kRecordBytes;
   });
 }
