@@ -100,8 +100,13 @@ std::uint64_t mix64(std::uint64_t z) {
 
 std::vector<std::uint64_t> out_row_digests(const Graph& g, std::span<const ParticleId> ids) {
   std::vector<std::uint64_t> d(g.n, 0);
+  // The ids are read in column order, cache misses on large graphs: the one 16 entries on is
+  // fetched early (speed only).
+  constexpr std::uint64_t kAhead = 16;
+  const std::uint64_t last = g.out_ptr[g.n] == 0 ? 0 : g.out_ptr[g.n] - 1;
   for (std::uint32_t p = 0; p < g.n; ++p)
     for (std::uint64_t k = g.out_ptr[p]; k < g.out_ptr[p + 1]; ++k) {
+      __builtin_prefetch(ids.data() + g.out_col[std::min(k + kAhead, last)]);
       std::uint64_t t = 0;
       for (int b = 7; b >= 0; --b) t = (t << 8) | ids[g.out_col[k]][static_cast<std::size_t>(b)];
       d[p] += mix64(t ^ mix64(static_cast<std::uint64_t>(g.out_w[k])));
@@ -122,7 +127,10 @@ Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph&
                          " particles");
   const IdIndex index = IdIndex::over(next.particles);
   std::vector<std::int64_t> next_of(np);
-  for (std::size_t p = 0; p < np; ++p) next_of[p] = index.find(prev.ids[p], next.particles);
+  for (std::size_t p = 0; p < np; ++p) {
+    index.prefetch_slot(prev.ids[std::min(p + 16, np - 1)]);  // a cache miss on large graphs (speed only)
+    next_of[p] = index.find(prev.ids[p], next.particles);
+  }
   // R1-INC-002: the anchor set is immutable along a chain.
   for (std::size_t p = 0; p < anchor_count(np); ++p)
     if (next_of[p] < 0)
