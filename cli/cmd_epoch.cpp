@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <future>
 #include <cstdio>
 #include <optional>
 
@@ -157,6 +158,14 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   R1_ASSIGN(const ChosenBackend chosen, c.backend.make());
   ProgressLine progress;
   const auto t0 = std::chrono::steady_clock::now();
+  // The earlier epoch (R1-INC-001) is read and checked while the snapshot is read: the snapshot's
+  // parse runs on one thread, and PREV's digests fill the other cores. Its files' tree leaves
+  // let the new epoch's digests hash only what changed (R1-EPO-016). Errors come in the order of
+  // the reads one after the other (the snapshot's first); an early return waits for the task.
+  EpochLeaves prev_leaves;
+  std::future<Result<Epoch>> prev_read;
+  if (!c.from.empty())
+    prev_read = std::async(std::launch::async, [&c, &prev_leaves] { return read_epoch(c.from, &prev_leaves); });
   R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
   R1_ASSIGN(Snapshot s, read_snapshot(c.snapshot, ro));
   // T0 content (R1-EPO-030..033): read before the stages, so a bad side file costs no solve.
@@ -173,8 +182,6 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   std::optional<render::NeuralField> prev_field;
   std::vector<hemera::Digest> prev_ids;
   render::Scene prev_scene;
-  // PREV's files by their tree leaves: the new epoch's digests hash only what changed (R1-EPO-016).
-  EpochLeaves prev_leaves;
   if (c.from.empty()) {
     // The digest now, then the link records go: nothing after the digest and the layout graph
     // reads them, and the spectral stage's basis is the peak they would add to (R1-EPO-005).
@@ -184,9 +191,10 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     std::vector<Link>().swap(s.links);
     R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
   } else {
-    // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034).
+    // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034). `previous`
+    // is the wait for PREV beyond the snapshot's read.
     const auto t1 = std::chrono::steady_clock::now();
-    R1_ASSIGN(Epoch prev, read_epoch(c.from, &prev_leaves));
+    R1_ASSIGN(Epoch prev, prev_read.get());
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
     const std::string prev_nrf = (std::filesystem::path(c.from) / "field.nrf").string();
