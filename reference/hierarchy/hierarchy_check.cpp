@@ -2,8 +2,8 @@
 // independently of the builder (R1-HIER-002, R1-HIER-013, R1-HIER-015, R1-HIER-022,
 // R1-HIER-040..043).
 #include <algorithm>
-#include <span>
 #include <numeric>
+#include <span>
 #include <string>
 
 #include "r1/fixedpoint/q32.hpp"

@@ -1,4 +1,4 @@
-// Hemera v2, 32-byte digests (R1-HASH-001..022, spec/hemera.md): Poseidon2 over Goldilocks,
+// Hemera v2, 32-byte digests (R1-HASH-001..024, spec/hemera.md): Poseidon2 over Goldilocks,
 // plain/keyed/derive-key sponge, tree hash, and the lane-batched bulk paths.
 #pragma once
 
@@ -91,7 +91,7 @@ Digest hash_leaf(std::span<const std::uint8_t> chunk, std::uint64_t counter, boo
 Digest hash_node(const Digest& left, const Digest& right, bool is_root);
 Digest root_hash(std::span<const std::uint8_t> data, bool parallel = true);
 
-// The tree by its leaves, for inputs that change in place between versions (epoch files, R1-HASH-013):
+// The tree by its leaves, for inputs that change in place between versions (epoch files, R1-HASH-024):
 // root_hash(data) == root_of_leaves(tree_leaves(data)). tree_leaves_reusing gives the same leaves,
 // taking leaf i from previous_leaves (the leaves of `previous`) when chunk i of data equals chunk
 // i of previous byte for byte and both have more than one leaf; it hashes only the others.
