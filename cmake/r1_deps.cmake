@@ -11,6 +11,8 @@ if(NOT TARGET CLI11::CLI11)
   target_include_directories(CLI11::CLI11 INTERFACE ${CLI11_INCLUDE_DIR})
 endif()
 find_package(nlohmann_json 3 REQUIRED)
+# SHA-256 of the snapshot's record chunks (R1-EPO-017): OpenSSL's libcrypto.
+find_package(OpenSSL 3 REQUIRED COMPONENTS Crypto)
 if(R1_BUILD_TESTS)
   find_package(GTest REQUIRED)
   find_package(rapidcheck REQUIRED)

@@ -164,10 +164,6 @@ Digest merge_levels(std::vector<Digest> level, bool parallel) {
   return level[0];
 }
 
-std::uint64_t leaf_count(std::uint64_t total_bytes) {
-  return total_bytes == 0 ? 1 : (total_bytes + CHUNK_BYTES - 1) / CHUNK_BYTES;
-}
-
 // Leaves todo[0..count) of an n-leaf tree over a chunk source (get(i, scratch) returns chunk i,
 // either pointing into memory it already has or filling the 4096-byte scratch buffer), written
 // to leaves[todo[k]], in batches of LANES.
@@ -260,6 +256,10 @@ std::vector<Digest> tree_leaves_reusing(std::span<const std::uint8_t> data, std:
   return leaves;
 }
 
+std::uint64_t leaf_count(std::uint64_t total_bytes) {
+  return total_bytes == 0 ? 1 : (total_bytes + CHUNK_BYTES - 1) / CHUNK_BYTES;
+}
+
 Digest root_of_leaves(std::vector<Digest> leaves, bool parallel) {
   assert(!leaves.empty());
   return merge_levels(std::move(leaves), parallel);
@@ -267,14 +267,28 @@ Digest root_of_leaves(std::vector<Digest> leaves, bool parallel) {
 
 namespace detail {
 
+namespace {
+// Chunk i of a ChunkFill source, filled into the caller's scratch.
+struct FilledChunks {
+  const void* ctx;
+  ChunkFill fill;
+  std::span<const std::uint8_t> operator()(std::uint64_t i, std::uint8_t* scratch) const {
+    const std::size_t len = std::min(CHUNK_BYTES, fill(ctx, i, std::span<std::uint8_t>(scratch, CHUNK_BYTES)));
+    return std::span<const std::uint8_t>(scratch, len);
+  }
+};
+}  // namespace
+
 Digest tree_hash(std::uint64_t total_bytes, const void* ctx, ChunkFill fill, bool parallel) {
-  return tree_hash_impl(
-      total_bytes,
-      [&](std::uint64_t i, std::uint8_t* scratch) {
-        const std::size_t len = std::min(CHUNK_BYTES, fill(ctx, i, std::span<std::uint8_t>(scratch, CHUNK_BYTES)));
-        return std::span<const std::uint8_t>(scratch, len);
-      },
-      parallel);
+  return tree_hash_impl(total_bytes, FilledChunks{ctx, fill}, parallel);
+}
+
+void tree_leaves_of(std::uint64_t total_bytes, std::span<const std::uint64_t> todo, const void* ctx, ChunkFill fill,
+                    std::span<Digest> leaves, bool parallel) {
+  const std::uint64_t n = leaf_count(total_bytes);
+  assert(leaves.size() == n);
+  for ([[maybe_unused]] const std::uint64_t i : todo) assert(i < n);
+  hash_leaves(n, todo.data(), todo.size(), FilledChunks{ctx, fill}, leaves.data(), parallel);
 }
 
 }  // namespace detail

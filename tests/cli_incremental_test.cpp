@@ -44,6 +44,16 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
   EXPECT_EQ(u.at("hops"), 3);
   EXPECT_LE(u.at("certificate").get<double>(), u.at("eps_x").get<double>());
   EXPECT_EQ(u.at("vector_bound").at(4), nullptr);
+  // The digest from PREV's record chunks (R1-EPO-017) is the one `r1 info` finds by hashing every
+  // record, and the chunks are those of an epoch of NEXT by itself.
+  const auto info = run_cli({"info", c.next.string()});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("digest             " + manifest(c.d / "inc").at("snapshot").at("digest").get<std::string>()),
+            std::string::npos)
+      << info.out;
+  ASSERT_EQ(run_cli({"epoch", c.next.string(), "--no-timings", "-q", "-o", (c.d / "alone").string()}).exit_code, 0);
+  EXPECT_EQ(r1::test::read_file(c.d / "inc/records.chunks"), r1::test::read_file(c.d / "alone/records.chunks"));
+  EXPECT_NE(r1::test::read_file(c.d / "inc/records.chunks"), r1::test::read_file(c.prev / "records.chunks"));
   // The chain goes on: the next update reads the record (epochs since the full solve: 2).
   const auto again = run_cli({"epoch", c.next.string(), "--from", (c.d / "inc").string(), "--hops", "3", "--no-timings",
                               "-q", "-o", (c.d / "inc2").string()});

@@ -30,8 +30,10 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "r1-epoch";
-constexpr int kVersion = 4;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64;
-                             // 4: image.i128 with residual_sums, heat.q32
+constexpr int kVersion = 5;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64;
+                             // 4: image.i128 with residual_sums, heat.q32; 5: records.chunks
+constexpr int kOldestVersion = 4;  // read as well: a version 4 epoch is one without records.chunks
+constexpr std::size_t kChunkRowBytes = 64;  // records.chunks: SHA-256, then the Hemera leaf
 
 using format::kEdgeBytes;
 using format::q32_column;
@@ -248,6 +250,20 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
       return Status::internal("epoch: " + std::to_string(e.spectrum.image.size()) + " image numerators for " + std::to_string(n) +
                               " particles");
     f.emplace_back("image.i128", format::i128_column(e.spectrum.image));
+  }
+  // The record stream's chunks (R1-EPO-017): SHA-256 then leaf, per chunk.
+  if (!e.record_chunks.leaves.empty()) {
+    const std::size_t chunks = static_cast<std::size_t>(hemera::leaf_count(e.links * kRecordBytes));
+    if (e.record_chunks.leaves.size() != chunks || e.record_chunks.sha.size() != chunks)
+      return Status::internal("epoch: " + std::to_string(e.record_chunks.leaves.size()) + " record chunks for " +
+                              std::to_string(e.links) + " links");
+    std::string c;
+    c.reserve(chunks * kChunkRowBytes);
+    for (std::size_t i = 0; i < chunks; ++i) {
+      c.append(reinterpret_cast<const char*>(e.record_chunks.sha[i].data()), e.record_chunks.sha[i].size());
+      c.append(reinterpret_cast<const char*>(e.record_chunks.leaves[i].data()), e.record_chunks.leaves[i].size());
+    }
+    f.emplace_back("records.chunks", std::move(c));
   }
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
@@ -468,10 +484,10 @@ Status read_edges(const EpochFiles& files, const fs::path& path, std::size_t n, 
 Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* keep) {
   const std::string manifest = (dir / "manifest.json").string();
   if (m.value("format", "") != kFormat) return Status::input(manifest + ": not an r1 epoch manifest");
-  if (m.value("version", 0) != kVersion)
-    return Status::input(manifest + ": epoch version " + std::to_string(m.value("version", 0)) +
-                         " is not supported (r1 reads version " + std::to_string(kVersion) +
-                         "): compute it again with r1 epoch");
+  const int version = m.value("version", 0);
+  if (version < kOldestVersion || version > kVersion)
+    return Status::input(manifest + ": epoch version " + std::to_string(version) + " is not supported (r1 reads versions " +
+                         std::to_string(kOldestVersion) + " to " + std::to_string(kVersion) + "): compute it again with r1 epoch");
   Epoch e;
   const std::size_t n = m.at("snapshot").at("particles").get<std::size_t>();
   e.source = m.at("snapshot").at("source").get<std::string>();
@@ -591,6 +607,23 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
   e.titles.assign(n, {});
   if (const InputFile* t = files.find("titles.tsv")) R1_TRY(read_titles(*t, (dir / "titles.tsv").string(), e));
   R1_TRY(read_edges(files, dir / "edges.bin", n, m.at("snapshot").at("layout_edges").get<std::size_t>(), e));
+  if (const InputFile* c = files.find("records.chunks")) {
+    const std::size_t chunks = static_cast<std::size_t>(hemera::leaf_count(e.links * kRecordBytes));
+    const std::string_view b = c->text();
+    if (b.size() != chunks * kChunkRowBytes)
+      return Status::input((dir / "records.chunks").string() + ": " + std::to_string(b.size()) + " bytes for " +
+                           std::to_string(e.links) + " links (expected " + std::to_string(chunks * kChunkRowBytes) + ")");
+    e.record_chunks.sha.resize(chunks);
+    e.record_chunks.leaves.resize(chunks);
+    for (std::size_t i = 0; i < chunks; ++i) {
+      std::memcpy(e.record_chunks.sha[i].data(), b.data() + i * kChunkRowBytes, 32);
+      std::memcpy(e.record_chunks.leaves[i].data(), b.data() + i * kChunkRowBytes + 32, 32);
+    }
+    // The leaves are the snapshot digest's: a file from another snapshot, or one of leaves that
+    // do not make its digest, is not carried into the next epoch's digest.
+    if (hemera::root_of_leaves(e.record_chunks.leaves) != e.snapshot_digest)
+      return Status::input((dir / "records.chunks").string() + ": its leaves do not combine to the snapshot digest");
+  }
   R1_ASSIGN(const std::string_view out_rows, files.rows("outrows.u64", 8));
   e.out_rows = format::read_u64_column(out_rows, n);
   if (e.spectrum.sums_shift >= 0) {

@@ -229,6 +229,56 @@ TEST(EpochIo, ConsistentDigestsDoNotHideBadEdgesOrHierarchy) {
   EXPECT_NE(r.status().message().find("hierarchy.bin: "), std::string::npos) << r.status().message();
 }
 
+// records.chunks (R1-EPO-017): read back as written, its leaves bound to the snapshot digest; an
+// epoch of version 4 (without it) is read as well.
+TEST(EpochIo, RecordChunksAreReadBackAndBoundToTheSnapshotDigest) {
+  r1::test::TempDir d;
+  auto e = synthetic(6);
+  e.links = 100;  // 12,800 bytes of records: four chunks
+  for (std::size_t i = 0; i < 4; ++i) {
+    e.record_chunks.sha.push_back(r1::sha256(std::span(e.ids[i])));
+    e.record_chunks.leaves.push_back(r1::hemera::hash("leaf " + std::to_string(i)));
+  }
+  e.snapshot_digest = r1::hemera::root_of_leaves(e.record_chunks.leaves);
+  ASSERT_TRUE(r1::write_epoch(e, d / "a").is_ok());
+  auto r = r1::read_epoch(d / "a");
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  EXPECT_EQ(r->record_chunks.sha, e.record_chunks.sha);
+  EXPECT_EQ(r->record_chunks.leaves, e.record_chunks.leaves);
+  EXPECT_EQ(r1::test::read_file(d / "a/records.chunks").size(), 4u * 64);
+
+  auto other = e;
+  other.snapshot_digest = r1::hemera::hash("another snapshot");
+  ASSERT_TRUE(r1::write_epoch(other, d / "b").is_ok());
+  r = r1::read_epoch(d / "b");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("records.chunks: its leaves do not combine to the snapshot digest"), std::string::npos)
+      << r.status().message();
+
+  other = e;
+  other.links = 200;  // seven chunks
+  const auto w = r1::write_epoch(other, d / "c");
+  ASSERT_FALSE(w.is_ok());
+  EXPECT_NE(w.message().find("4 record chunks for 200 links"), std::string::npos) << w.message();
+
+  // Version 4: no records.chunks, read with none; version 3 is refused.
+  ASSERT_TRUE(r1::write_epoch(synthetic(6), d / "v4").is_ok());
+  EXPECT_FALSE(fs::exists(d / "v4/records.chunks"));
+  auto m = nlohmann::json::parse(r1::test::read_file(d / "v4/manifest.json"));
+  EXPECT_EQ(m["version"], 5);
+  m["version"] = 4;
+  r1::test::write_file(d / "v4/manifest.json", m.dump(2));
+  r = r1::read_epoch(d / "v4");
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  EXPECT_TRUE(r->record_chunks.leaves.empty());
+  m["version"] = 3;
+  r1::test::write_file(d / "v4/manifest.json", m.dump(2));
+  r = r1::read_epoch(d / "v4");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("epoch version 3 is not supported (r1 reads versions 4 to 5)"), std::string::npos)
+      << r.status().message();
+}
+
 TEST(EpochIo, ReplacesAnEpochButNeverOtherDirectories) {
   r1::test::TempDir d;
   ASSERT_TRUE(r1::write_epoch(synthetic(4), d / "ep").is_ok());

@@ -133,16 +133,18 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
   return run_epoch(snapshot, graph, o, reference, progress);
 }
 
-Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o) {
+Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, const RecordChunks* previous) {
   Epoch e;
   Stopwatch clock(e.timings);
   e.domain = o.domain;
   e.source = snapshot.source;
   if (o.snapshot_digest) {  // formed by the caller: its time stands for the lap
     e.snapshot_digest = *o.snapshot_digest;
+    e.record_chunks = o.record_chunks;
     e.timings.push_back({"digest", o.snapshot_digest_seconds});
   } else {
-    e.snapshot_digest = snapshot_digest(snapshot);  // Hemera over every record: its own lap
+    // Hemera over every record, or over the chunks that differ from PREV's (R1-EPO-017): its own lap.
+    e.snapshot_digest = snapshot_digest(snapshot, e.record_chunks, previous);
     clock.lap("digest");
   }
   e.ids = snapshot.particles;

@@ -106,7 +106,7 @@ TEST(EpochRun, TheCallersDigestLetsTheLinkRecordsGo) {
     ASSERT_TRUE(g.is_ok()) << g.status().message();
     r1::Snapshot bare = s;
     r1::EpochOptions o;
-    o.snapshot_digest = r1::snapshot_digest(s);
+    o.snapshot_digest = r1::snapshot_digest(s, o.record_chunks);
     std::vector<r1::Link>().swap(bare.links);
     EXPECT_FALSE(r1::snapshot_digest(bare) == *o.snapshot_digest);
     auto e = r1::run_epoch(bare, *g, o);

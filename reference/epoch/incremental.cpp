@@ -536,6 +536,11 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     EpochOptions o = options;
     o.anchor = prev_anchor;
     o.anchor_name = prev_name + "/anchor.bin";
+    if (!o.snapshot_digest) {  // PREV's leaves for the unchanged chunks (R1-EPO-017)
+      const auto t = std::chrono::steady_clock::now();
+      o.snapshot_digest = snapshot_digest(next, o.record_chunks, &prev.record_chunks);
+      o.snapshot_digest_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    }
     R1_ASSIGN(Epoch e, run_epoch(next, g, o, stages, progress));
     UpdateInfo u = info;
     u.incremental = false;
@@ -753,7 +758,9 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
 
   // ---- the incremental epoch ----
   const double spectral_s = since(clock) - global_s - carry_s;
-  Epoch e = epoch_header(next, g, options);  // the digest: after the decision, which a full solve repeats
+  // The digest: after the decision, which a full solve repeats; PREV's chunk leaves where the
+  // record stream's chunks are PREV's (R1-EPO-017).
+  Epoch e = epoch_header(next, g, options, &prev.record_chunks);
   Spectrum<Q32>& s = e.spectrum;
   s.n = static_cast<std::uint32_t>(n);
   s.rho = 0;

@@ -100,12 +100,20 @@ std::vector<Digest> tree_leaves_reusing(std::span<const std::uint8_t> data, std:
                                         std::span<const Digest> previous_leaves, bool parallel = true);
 // leaves.size() >= 1.
 Digest root_of_leaves(std::vector<Digest> leaves, bool parallel = true);
+// The number of leaves of the tree over total_bytes: ceil(total_bytes / 4096), at least 1.
+std::uint64_t leaf_count(std::uint64_t total_bytes);
 
 // Tree hash of a stream whose chunks are produced on demand: chunk(i, out) fills `out` (4096
 // bytes, or fewer for the last chunk) and returns the byte count. Used to hash large record
 // streams without materialising them. `chunk` may be called concurrently for different i.
 template <class ChunkFn>
 Digest root_hash_chunks(std::uint64_t total_bytes, ChunkFn&& chunk, bool parallel = true);
+// Leaves todo[k] of that tree (leaves.size() == leaf_count(total_bytes)): leaves[todo[k]] is
+// written and every other entry left as it is. For streams whose unchanged chunks are known by
+// other means (the snapshot digest of a chain's next epoch, R1-EPO-017).
+template <class ChunkFn>
+void chunk_leaves(std::uint64_t total_bytes, std::span<const std::uint64_t> todo, ChunkFn&& chunk,
+                  std::span<Digest> leaves, bool parallel = true);
 
 std::string to_hex(std::span<const std::uint8_t> bytes);
 inline std::string to_hex(const Digest& d) { return to_hex(std::span<const std::uint8_t>(d)); }
@@ -119,15 +127,26 @@ Digest merge_leaves(std::span<const Digest> leaves, bool is_root);
 // Fills `out` with chunk `index` and returns its length (see root_hash_chunks).
 using ChunkFill = std::size_t (*)(const void* ctx, std::uint64_t index, std::span<std::uint8_t> out);
 Digest tree_hash(std::uint64_t total_bytes, const void* ctx, ChunkFill fill, bool parallel);
+void tree_leaves_of(std::uint64_t total_bytes, std::span<const std::uint64_t> todo, const void* ctx, ChunkFill fill,
+                    std::span<Digest> leaves, bool parallel);
+template <class Fn>
+ChunkFill chunk_fill() {
+  return [](const void* ctx, std::uint64_t i, std::span<std::uint8_t> out) -> std::size_t {
+    return (*const_cast<Fn*>(static_cast<const Fn*>(ctx)))(i, out);
+  };
+}
 }  // namespace detail
 
 template <class ChunkFn>
 Digest root_hash_chunks(std::uint64_t total_bytes, ChunkFn&& chunk, bool parallel) {
   using Fn = std::remove_reference_t<ChunkFn>;
-  const detail::ChunkFill fill = [](const void* ctx, std::uint64_t i, std::span<std::uint8_t> out) -> std::size_t {
-    return (*const_cast<Fn*>(static_cast<const Fn*>(ctx)))(i, out);
-  };
-  return detail::tree_hash(total_bytes, static_cast<const void*>(&chunk), fill, parallel);
+  return detail::tree_hash(total_bytes, static_cast<const void*>(&chunk), detail::chunk_fill<Fn>(), parallel);
+}
+template <class ChunkFn>
+void chunk_leaves(std::uint64_t total_bytes, std::span<const std::uint64_t> todo, ChunkFn&& chunk,
+                  std::span<Digest> leaves, bool parallel) {
+  using Fn = std::remove_reference_t<ChunkFn>;
+  detail::tree_leaves_of(total_bytes, todo, static_cast<const void*>(&chunk), detail::chunk_fill<Fn>(), leaves, parallel);
 }
 
 }  // namespace r1::hemera

@@ -12,6 +12,7 @@
 #include "r1/fixedpoint/exact_sum.hpp"
 #include "r1/fixedpoint/hemera.hpp"
 #include "r1/fixedpoint/q32.hpp"
+#include "r1/spec/snapshot.hpp"
 
 namespace r1 {
 
@@ -207,6 +208,7 @@ struct StageTiming {
 struct Epoch {
   std::string source;                      // snapshot path as given
   hemera::Digest snapshot_digest{};        // R1-IN-040
+  RecordChunks record_chunks;              // per chunk of the record stream: SHA-256 and leaf (R1-EPO-017)
   NumericDomain domain = NumericDomain::kQ32;
   std::vector<hemera::Digest> ids;         // particles, canonical order
   std::vector<std::string> titles;         // display title per particle ("" = none)

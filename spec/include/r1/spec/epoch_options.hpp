@@ -67,6 +67,7 @@ struct EpochOptions {
   // the epoch takes it as is. Nothing after the digest and the layout graph reads the snapshot's
   // link records, so a caller that formed both may release them before the stages (R1-EPO-005).
   std::optional<hemera::Digest> snapshot_digest;
+  RecordChunks record_chunks;  // with snapshot_digest: its chunks (R1-EPO-017); none: no records.chunks
   double snapshot_digest_seconds = 0;
 };
 

@@ -67,6 +67,23 @@ void encode_record(const Snapshot& s, const Link& l, std::uint8_t out[kRecordByt
 // The snapshot digest (decision 9, R1-IN-040): Hemera tree hash of the canonical record stream.
 hemera::Digest snapshot_digest(const Snapshot& s);
 
+// SHA-256 (FIPS 180-4) of a byte string.
+using Sha256 = std::array<std::uint8_t, 32>;
+Sha256 sha256(std::span<const std::uint8_t> bytes);
+
+// Per 4096-byte chunk of the record stream (R1-EPO-017, an epoch's `records.chunks`): the chunk's
+// SHA-256 and its leaf in the digest's tree.
+struct RecordChunks {
+  std::vector<Sha256> sha;
+  std::vector<hemera::Digest> leaves;
+};
+
+// The snapshot digest and, in `chunks`, every chunk's SHA-256 and leaf. With `previous` (the
+// chunks of an earlier version of the stream: the epoch before in a chain), chunk i takes
+// previous's leaf i instead of being hashed when its SHA-256 is previous's sha[i] and both streams
+// have more than one chunk. The digest is the same with or without `previous`.
+hemera::Digest snapshot_digest(const Snapshot& s, RecordChunks& chunks, const RecordChunks* previous = nullptr);
+
 // Title of particle i for display: its title, else its name, else the first 16 hex digits of its id.
 std::string display_name(const Snapshot& s, std::size_t i);
 
