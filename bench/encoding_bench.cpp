@@ -52,6 +52,18 @@ void BM_BetweennessOfEpoch(benchmark::State& state, const std::shared_ptr<const 
   state.counters["particles"] = static_cast<double>(in->graph.n);
 }
 
+// r_0 from the layout (R1-ENC-007), which the epoch's encoding stage computes before encode():
+// the median nearest-neighbour spacing of the distinct positions, on all cores.
+void BM_RadiusScaleOfEpoch(benchmark::State& state, const std::shared_ptr<const Input>& in) {
+  std::int64_t r0 = 0;
+  for (auto _ : state) r0 = r1::radius_scale_from_layout(in->epoch.frame.position, in->epoch.focus.phi, true).r0_squared_raw;
+  if (in->epoch.encoding.radius_scale == "spacing" && in->epoch.encoding.r0_squared_raw != r0) {
+    state.SkipWithError("r_0 differs from the epoch's");
+    return;
+  }
+  state.counters["particles"] = static_cast<double>(in->epoch.ids.size());
+}
+
 // The hashed pivots alone (R1-ENC-015): one Hemera hash per particle.
 void BM_PivotsOfEpoch(benchmark::State& state, const std::shared_ptr<const Input>& in) {
   const std::uint32_t n = in->graph.n;
@@ -112,6 +124,7 @@ const bool registered = [] {
   std::shared_ptr<const Input> shared = in;
   benchmark::RegisterBenchmark("BM_BetweennessOfEpoch", BM_BetweennessOfEpoch, shared)->Unit(benchmark::kMillisecond)->Iterations(1);
   benchmark::RegisterBenchmark("BM_PivotsOfEpoch", BM_PivotsOfEpoch, shared)->Unit(benchmark::kMillisecond)->Iterations(1);
+  benchmark::RegisterBenchmark("BM_RadiusScaleOfEpoch", BM_RadiusScaleOfEpoch, shared)->Unit(benchmark::kMillisecond)->Iterations(1);
   benchmark::RegisterBenchmark("BM_EncodingOfEpoch", BM_EncodingOfEpoch, shared)->Unit(benchmark::kMillisecond)->Iterations(1);
   return true;
 }();

@@ -132,6 +132,20 @@ Status check_graph(const Graph& g) {
   return Status::ok();
 }
 
+Shares::Shares(std::vector<std::int64_t> raws) : size_(raws.size()) {
+  const bool fits = std::all_of(raws.begin(), raws.end(), [](std::int64_t v) { return v >= 0 && v <= 0xffffffffLL; });
+  if (fits && !raws.empty()) {
+    narrow_.assign(raws.begin(), raws.end());
+  } else {
+    wide_ = std::move(raws);
+  }
+}
+
+std::vector<std::int64_t> Shares::raws() const {
+  if (narrow_.empty()) return wide_;
+  return std::vector<std::int64_t>(narrow_.begin(), narrow_.end());
+}
+
 // ---- Q32 ------------------------------------------------------------------------------------------
 
 Result<OperatorsQ32> OperatorsQ32::build(const Graph& g, const TriKernelParams& params, bool parallel) {
@@ -145,14 +159,16 @@ Result<OperatorsQ32> OperatorsQ32::build(const Graph& g, const TriKernelParams& 
   {
     std::vector<std::uint64_t> slot_of_out;
     ops.pattern_ = build_pattern(g, slot_of_out);
-    ops.in_p_.resize(g.out_col.size());
-    apportion_rows(g.out_ptr, g.out_w, slot_of_out, ops.in_p_);
+    std::vector<std::int64_t> in_p(g.out_col.size());
+    apportion_rows(g.out_ptr, g.out_w, slot_of_out, in_p);
+    ops.in_p_ = Shares(std::move(in_p));
   }
   {
     R1_ASSIGN(const auto mirror, mirror_slots(g));
     // Column j of N is row j's shares placed at the mirrored entries (i, j) (R1-FOC-041).
-    ops.walk_.resize(g.col.size());
-    apportion_rows(g.row_ptr, g.w, mirror, ops.walk_);
+    std::vector<std::int64_t> walk(g.col.size());
+    apportion_rows(g.row_ptr, g.w, mirror, walk);
+    ops.walk_ = Shares(std::move(walk));
   }
   std::vector<std::int64_t> own;
   const std::vector<std::int64_t>& prior = prior_of(g, own);
@@ -215,7 +231,7 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   for (std::uint32_t a = r; a < count; ++a) rows->row_ptr[a + 1] = rows->row_ptr[a];  // the ring: empty rows
   rows->col.resize(rows->row_ptr[count]);
   rows->w.resize(rows->row_ptr[count]);
-  ops.walk_.resize(rows->row_ptr[count]);
+  std::vector<std::int64_t> walk(rows->row_ptr[count]), in_p;
 
   // Shares of a whole row of the graph, apportioned once per local particle that needs them.
   ApportionScratch scratch;
@@ -250,7 +266,7 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
       const auto last = g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[j + 1]);
       const auto at = std::lower_bound(first, last, q);
       if (at == last || *at != q) return bad("A_sym is not symmetric at (" + std::to_string(j) + ", " + std::to_string(q) + ")");
-      ops.walk_[lk] = shares[static_cast<std::size_t>(o + (at - first))];
+      walk[lk] = shares[static_cast<std::size_t>(o + (at - first))];
       // P(j, q) when j links to q: j's share of its out-row (R1-FOC-020); the in-links of q come
       // out by ascending source as in build().
       const auto ofirst = g.out_col.begin() + static_cast<std::ptrdiff_t>(g.out_ptr[j]);
@@ -259,7 +275,7 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
       if (oat != olast && *oat == q) {
         const std::int64_t oo = shares_of(out_offset, b, g.out_ptr, g.out_w);
         ops.pattern_.in_src.push_back(b);
-        ops.in_p_.push_back(shares[static_cast<std::size_t>(oo + (oat - ofirst))]);
+        in_p.push_back(shares[static_cast<std::size_t>(oo + (oat - ofirst))]);
       }
     }
     ops.pattern_.in_ptr[a + 1] = ops.pattern_.in_src.size();
@@ -281,6 +297,8 @@ Result<OperatorsQ32> OperatorsQ32::build_local(const Graph& g, const TriKernelPa
   const std::vector<std::int64_t>& prior = prior_of(g, own);
   for (std::uint32_t a = 0; a < r; ++a) ops.prior_[a] = Q32::from_raw(prior[region[a]]);
   ops.set_constants(params, g.n);
+  ops.walk_ = Shares(std::move(walk));
+  ops.in_p_ = Shares(std::move(in_p));
   ops.row_ptr_ = rows->row_ptr.data();
   ops.col_ = rows->col.data();
   ops.w_ = rows->w.data();
@@ -318,7 +336,8 @@ Status OperatorsQ32::use_products(const ExactProductFactory& factory) {
   const std::uint32_t count = n();
   const std::span<const std::uint64_t> ptr(row_ptr_, std::size_t{count} + 1);
   const std::span<const std::uint32_t> col(col_, walk_.size());
-  R1_ASSIGN(std::unique_ptr<ExactProduct> w, factory(ptr, col, walk_, true));
+  const std::vector<std::int64_t> walk = walk_.raws();
+  R1_ASSIGN(std::unique_ptr<ExactProduct> w, factory(ptr, col, walk, true));
   // The Chebyshev step over (t, prev), 2n columns: row i is 2 N(i, .) on t and -2^32 on prev_i,
   // so its exact sum is 2 sum_j N(i, j) t_j - prev_i 2^32; an isolated i takes 2 t_i 2^32, its
   // walk's identity row (R1-FOC-041, R1-FOC-043).
@@ -334,14 +353,14 @@ Status OperatorsQ32::use_products(const ExactProductFactory& factory) {
     }
     for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) {
       ccol.push_back(col_[k]);
-      cval.push_back(2 * walk_[k]);
+      cval.push_back(2 * walk[k]);
     }
     ccol.push_back(count + i);
     cval.push_back(-static_cast<std::int64_t>(kOne));
     cptr[i + 1] = ccol.size();
   }
   R1_ASSIGN(std::unique_ptr<ExactProduct> c, factory(cptr, ccol, cval, false));
-  R1_ASSIGN(std::unique_ptr<ExactProduct> in, factory(pattern_.in_ptr, pattern_.in_src, in_p_, false));
+  R1_ASSIGN(std::unique_ptr<ExactProduct> in, factory(pattern_.in_ptr, pattern_.in_src, in_p_.raws(), false));
   if (w == nullptr || c == nullptr || in == nullptr) return Status::ok();  // declined: the row loops
   dev_walk_ = std::move(w);
   dev_chebyshev_ = std::move(c);
@@ -370,12 +389,8 @@ void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) co
   }
   for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t q = b; q < e; ++q) {
-      i128 acc = 0;
-      for (std::uint64_t s = pattern_.in_ptr[q]; s < pattern_.in_ptr[q + 1]; ++s) {
-        gather_ahead(phi.data(), pattern_.in_src.data(), s, in_p_.size());
-        acc += static_cast<i128>(in_p_[s]) * phi[pattern_.in_src[s]].raw;
-      }
-      const std::int64_t y = round_q32(acc);
+      const std::int64_t y =
+          round_q32(dot_row(in_p_, pattern_.in_src.data(), phi.data(), pattern_.in_ptr[q], pattern_.in_ptr[q + 1]));
       out[q] = Q32::from_raw(round_q32(static_cast<i128>(one_minus_t_) * y + static_cast<i128>(c) * prior_[q].raw));
     }
   });

@@ -47,6 +47,42 @@ inline void gather_ahead(const T* x, const std::uint32_t* col, std::uint64_t k, 
   if (k + kGatherAhead < end) __builtin_prefetch(x + col[k + kGatherAhead]);
 }
 
+// Apportioned shares of one (raws in [0, 2^32], R1-FOC-020, R1-FOC-041), stored in four bytes
+// each when every raw is below 2^32 (every row of more than one entry): a product over the whole
+// graph streams its shares and columns from memory, 12 bytes an entry in eight-byte form and 8 in
+// four-byte form (speed only; the values are the same).
+class Shares {
+ public:
+  Shares() = default;
+  explicit Shares(std::vector<std::int64_t> raws);
+  std::size_t size() const { return size_; }
+  // One of the two is non-null.
+  const std::uint32_t* narrow() const { return narrow_.empty() ? nullptr : narrow_.data(); }
+  const std::int64_t* wide() const { return narrow_.empty() ? wide_.data() : nullptr; }
+  std::int64_t operator[](std::size_t k) const { return narrow_.empty() ? wide_[k] : std::int64_t{narrow_[k]}; }
+  std::vector<std::int64_t> raws() const;
+
+ private:
+  std::vector<std::int64_t> wide_;
+  std::vector<std::uint32_t> narrow_;
+  std::size_t size_ = 0;
+};
+
+// sum_k w[k] x[col[k]] over entries [b, e) exactly (raws; `end` bounds the prefetch).
+template <class W>
+inline i128 dot_row(const W* w, const std::uint32_t* col, const Q32* x, std::uint64_t b, std::uint64_t e,
+                    std::uint64_t end) {
+  i128 acc = 0;
+  for (std::uint64_t k = b; k < e; ++k) {
+    gather_ahead(x, col, k, end);
+    acc += static_cast<i128>(static_cast<std::int64_t>(w[k])) * x[col[k]].raw;
+  }
+  return acc;
+}
+inline i128 dot_row(const Shares& w, const std::uint32_t* col, const Q32* x, std::uint64_t b, std::uint64_t e) {
+  return w.narrow() != nullptr ? dot_row(w.narrow(), col, x, b, e, w.size()) : dot_row(w.wide(), col, x, b, e, w.size());
+}
+
 // A backend's product failed (R1-FOC-092): the stage reports it as an internal error.
 struct ProductError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -117,12 +153,7 @@ class OperatorsQ32 {
   i128 walk_row(std::uint32_t i, const Q32* x) const {
     const std::uint64_t b = row_ptr_[i], e = row_ptr_[i + 1];
     if (b == e) return static_cast<i128>(x[i].raw) << Q32::kFracBits;
-    i128 acc = 0;
-    for (std::uint64_t k = b; k < e; ++k) {
-      gather_ahead(x, col_, k, walk_.size());
-      acc += static_cast<i128>(walk_[k]) * x[col_[k]].raw;
-    }
-    return acc;
+    return dot_row(walk_, col_, x, b, e);
   }
   bool parallel() const { return parallel_; }
 
@@ -136,8 +167,8 @@ class OperatorsQ32 {
   const std::int64_t* w_ = nullptr;
   const std::uint64_t* degree_ = nullptr;
   std::vector<Q32> prior_;
-  std::vector<std::int64_t> in_p_;   // P(p, q) per in-link, raw
-  std::vector<std::int64_t> walk_;   // N(i, j) at A_sym entry (i, j), raw
+  Shares in_p_;                      // P(p, q) per in-link, raw
+  Shares walk_;                      // N(i, j) at A_sym entry (i, j), raw
   std::int64_t one_minus_t_ = 0, teleport_ = 0, mu_ = 0, springs_a_ = 0;
   i128 frozen_dangling_ = 0;         // build_local: the dangling phi outside the region, exact
   std::uint32_t fixed_from_ = UINT32_MAX;  // build_local: |R|
