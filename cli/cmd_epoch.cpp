@@ -130,6 +130,10 @@ void print_summary(const Epoch& e, const std::string& dir, double total_s) {
               e.hierarchy.levels[1].size(), e.hierarchy.levels[2].size(), e.hierarchy.levels[3].size());
   if (e.update) {
     const UpdateInfo& u = *e.update;
+    // The record chunks the digest hashed; the rest were PREV's (R1-EPO-017).
+    if (!e.record_chunks.leaves.empty())
+      std::printf("digest             %zu of %zu record chunks hashed, the others unchanged since the earlier epoch\n",
+                  e.record_chunks.hashed, e.record_chunks.leaves.size());
     std::printf("update             %s: %llu touched (%llu new, %llu left), N_h %llu particles (%u hops), ||dL|| %.3g\n",
                 u.incremental ? "incremental" : "full solve", static_cast<unsigned long long>(u.touched),
                 static_cast<unsigned long long>(u.added), static_cast<unsigned long long>(u.dropped),

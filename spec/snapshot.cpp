@@ -124,6 +124,7 @@ hemera::Digest snapshot_digest(const Snapshot& s, RecordChunks& chunks, const Re
         },
         chunks.leaves);
   }
+  chunks.hashed = todo.size();
   return hemera::root_of_leaves(chunks.leaves);
 }
 

@@ -175,6 +175,8 @@ TEST(RecordChunks, LeavesAreTakenOnlyWhereTheChunksSha256IsTheEarlierOnes) {
     EXPECT_EQ(got.leaves[i], taken ? prev.leaves[i] : own.leaves[i]) << "chunk " << i;
   }
   EXPECT_EQ(got.sha, own.sha);
+  EXPECT_EQ(got.hashed, 3u);
+  EXPECT_EQ(own.hashed, 8u);
   // One chunk on either side: its leaf is the root's and binds that, so it is never taken.
   const r1::Snapshot small = drawn(3, 3);
   r1::RecordChunks one, again;

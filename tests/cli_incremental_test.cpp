@@ -54,6 +54,9 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
   ASSERT_EQ(run_cli({"epoch", c.next.string(), "--no-timings", "-q", "-o", (c.d / "alone").string()}).exit_code, 0);
   EXPECT_EQ(r1::test::read_file(c.d / "inc/records.chunks"), r1::test::read_file(c.d / "alone/records.chunks"));
   EXPECT_NE(r1::test::read_file(c.d / "inc/records.chunks"), r1::test::read_file(c.prev / "records.chunks"));
+  // The reweight changed one record in place: one chunk hashed, the rest taken from PREV.
+  const std::size_t chunks = r1::test::read_file(c.prev / "records.chunks").size() / 64;
+  EXPECT_NE(r.out.find("digest             1 of " + std::to_string(chunks) + " record chunks hashed"), std::string::npos) << r.out;
   // The chain goes on: the next update reads the record (epochs since the full solve: 2).
   const auto again = run_cli({"epoch", c.next.string(), "--from", (c.d / "inc").string(), "--hops", "3", "--no-timings",
                               "-q", "-o", (c.d / "inc2").string()});

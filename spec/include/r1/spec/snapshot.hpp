@@ -76,6 +76,9 @@ Sha256 sha256(std::span<const std::uint8_t> bytes);
 struct RecordChunks {
   std::vector<Sha256> sha;
   std::vector<hemera::Digest> leaves;
+  // How many leaves the snapshot_digest that filled these hashed with Hemera (the others came
+  // from `previous`); not stored in the file.
+  std::size_t hashed = 0;
 };
 
 // The snapshot digest and, in `chunks`, every chunk's SHA-256 and leaf. With `previous` (the
