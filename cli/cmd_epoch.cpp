@@ -190,10 +190,12 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     // The digest now, then the link records go: nothing after the digest and the layout graph
     // reads them, and the spectral stage's basis is the peak they would add to (R1-EPO-005).
     const auto td = std::chrono::steady_clock::now();
-    o.snapshot_digest = snapshot_digest(s, o.record_chunks);
+    RecordChunks chunks;
+    o.snapshot_digest = snapshot_digest(s, chunks);
     o.snapshot_digest_seconds = seconds_since(td);
     std::vector<Link>().swap(s.links);
     R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
+    e.record_chunks = std::move(chunks);
   } else {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034). `previous`
     // is the wait for PREV beyond the snapshot's read.

@@ -75,6 +75,7 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
                 .exit_code,
             0);
   EXPECT_EQ(manifest(c.d / "full").at("update").at("reason"), "forced (--full)");
+  EXPECT_EQ(r1::test::read_file(c.d / "full/records.chunks"), r1::test::read_file(c.d / "alone/records.chunks"));
   EXPECT_FALSE(manifest(c.d / "full").at("alignment").at("genesis").get<bool>());
 }
 

@@ -140,7 +140,6 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
   e.source = snapshot.source;
   if (o.snapshot_digest) {  // formed by the caller: its time stands for the lap
     e.snapshot_digest = *o.snapshot_digest;
-    e.record_chunks = o.record_chunks;
     e.timings.push_back({"digest", o.snapshot_digest_seconds});
   } else {
     // Hemera over every record, or over the chunks that differ from PREV's (R1-EPO-017): its own lap.

@@ -106,11 +106,14 @@ TEST(EpochRun, TheCallersDigestLetsTheLinkRecordsGo) {
     ASSERT_TRUE(g.is_ok()) << g.status().message();
     r1::Snapshot bare = s;
     r1::EpochOptions o;
-    o.snapshot_digest = r1::snapshot_digest(s, o.record_chunks);
+    r1::RecordChunks chunks;
+    o.snapshot_digest = r1::snapshot_digest(s, chunks);
     std::vector<r1::Link>().swap(bare.links);
     EXPECT_FALSE(r1::snapshot_digest(bare) == *o.snapshot_digest);
     auto e = r1::run_epoch(bare, *g, o);
     ASSERT_TRUE(e.is_ok()) << e.status().message();
+    EXPECT_TRUE(e->record_chunks.leaves.empty());  // the caller's to attach (R1-EPO-017)
+    e->record_chunks = std::move(chunks);
     EXPECT_TRUE(files(*e) == want);
     EXPECT_TRUE(e->snapshot_digest == *o.snapshot_digest);
   }

@@ -536,12 +536,14 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     EpochOptions o = options;
     o.anchor = prev_anchor;
     o.anchor_name = prev_name + "/anchor.bin";
+    RecordChunks chunks;
     if (!o.snapshot_digest) {  // PREV's leaves for the unchanged chunks (R1-EPO-017)
       const auto t = std::chrono::steady_clock::now();
-      o.snapshot_digest = snapshot_digest(next, o.record_chunks, &prev.record_chunks);
+      o.snapshot_digest = snapshot_digest(next, chunks, &prev.record_chunks);
       o.snapshot_digest_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     }
     R1_ASSIGN(Epoch e, run_epoch(next, g, o, stages, progress));
+    if (!chunks.leaves.empty()) e.record_chunks = std::move(chunks);
     UpdateInfo u = info;
     u.incremental = false;
     u.reason = std::move(reason);

@@ -66,8 +66,9 @@ struct EpochOptions {
   // The snapshot's digest (R1-IN-040) when the caller formed it already, with the seconds it took:
   // the epoch takes it as is. Nothing after the digest and the layout graph reads the snapshot's
   // link records, so a caller that formed both may release them before the stages (R1-EPO-005).
+  // The epoch then has no record chunks: the caller attaches its own (Epoch::record_chunks,
+  // R1-EPO-017) when the stages are done, so that they are not held twice meanwhile.
   std::optional<hemera::Digest> snapshot_digest;
-  RecordChunks record_chunks;  // with snapshot_digest: its chunks (R1-EPO-017); none: no records.chunks
   double snapshot_digest_seconds = 0;
 };
 
