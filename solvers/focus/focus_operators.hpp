@@ -48,9 +48,10 @@ inline void gather_ahead(const T* x, const std::uint32_t* col, std::uint64_t k, 
 }
 
 // Apportioned shares of one (raws in [0, 2^32], R1-FOC-020, R1-FOC-041), stored in four bytes
-// each when every raw is below 2^32 (every row of more than one entry): a product over the whole
-// graph streams its shares and columns from memory, 12 bytes an entry in eight-byte form and 8 in
-// four-byte form (speed only; the values are the same).
+// each when every raw is below 2^32 (a row of one entry, or one whose other weights are too small
+// to get a unit, has a share of 2^32 and keeps the operator in eight-byte form): a product over
+// the whole graph streams its shares and columns from memory, 12 bytes an entry in eight-byte form
+// and 8 in four-byte form (speed only; the values are the same).
 class Shares {
  public:
   Shares() = default;
