@@ -1,6 +1,8 @@
 // Per-particle arrays as little-endian bytes (R1-FMT-010, R1-EPO-011).
 #include "r1/format/arrays.hpp"
 
+#include <cstring>
+
 #include "r1/format/bytes.hpp"
 
 namespace r1::format {
@@ -33,6 +35,20 @@ std::string u64_column(std::span<const std::uint64_t> v) {
   o.reserve(v.size() * 8);
   for (const std::uint64_t x : v) put_u64(o, x);
   return o;
+}
+
+std::string bytes32_rows(std::span<const std::span<const Bytes32>> columns, std::size_t rows) {
+  std::string o;
+  o.reserve(rows * columns.size() * 32);
+  for (std::size_t i = 0; i < rows; ++i)
+    for (const auto& c : columns) o.append(reinterpret_cast<const char*>(c[i].data()), 32);
+  return o;
+}
+
+std::vector<Bytes32> read_bytes32_column(std::string_view b, std::size_t n, std::size_t stride, std::size_t k) {
+  std::vector<Bytes32> v(n);
+  for (std::size_t i = 0; i < n; ++i) std::memcpy(v[i].data(), b.data() + (i * stride + k) * 32, 32);
+  return v;
 }
 
 std::vector<std::uint64_t> read_u64_column(std::string_view b, std::size_t n) {

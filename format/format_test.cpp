@@ -67,6 +67,21 @@ TEST(Arrays, ColumnsRowsAndEdgesRoundTrip) {
   EXPECT_EQ(format::edge_at(eb, 1), edges[1]);
 }
 
+TEST(Arrays, Bytes32RowsAreRowMajorAndRoundTrip) {
+  std::vector<r1::format::Bytes32> a(3), b(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    a[i].fill(static_cast<std::uint8_t>(i));
+    b[i].fill(static_cast<std::uint8_t>(0x80 + i));
+  }
+  const std::span<const r1::format::Bytes32> columns[] = {a, b};
+  const std::string bytes = r1::format::bytes32_rows(columns, 3);
+  ASSERT_EQ(bytes.size(), 3u * 64);
+  EXPECT_EQ(static_cast<std::uint8_t>(bytes[32]), 0x80);  // row 0: a[0], then b[0]
+  EXPECT_EQ(static_cast<std::uint8_t>(bytes[64]), 1);
+  EXPECT_EQ(r1::format::read_bytes32_column(bytes, 3, 2, 0), a);
+  EXPECT_EQ(r1::format::read_bytes32_column(bytes, 3, 2, 1), b);
+}
+
 TEST(Golden, PositionBytesRoundTripAndRejectAWrongCount) {
   const std::vector<std::array<Q32, 3>> pos = {{Q32::from_raw(1), Q32::from_raw(-2), Q32::from_raw(3)}};
   const std::string b = format::position_bytes(pos);

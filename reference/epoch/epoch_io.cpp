@@ -35,6 +35,11 @@ constexpr int kVersion = 5;  // 2: edges.bin; hierarchy.bin read back and checke
 constexpr int kOldestVersion = 4;  // read as well: a version 4 epoch is one without records.chunks
 constexpr std::size_t kChunkRowBytes = 64;  // records.chunks: SHA-256, then the Hemera leaf
 
+// The chunks of a snapshot's record stream of `links` records (R1-IN-040, records.chunks).
+std::size_t record_chunk_count(std::uint64_t links) {
+  return static_cast<std::size_t>(hemera::leaf_count(links * kRecordBytes));
+}
+
 using format::kEdgeBytes;
 using format::q32_column;
 
@@ -202,10 +207,8 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
     return Status::internal("epoch: " + std::to_string(e.out_rows.size()) + " out-row digests for " + std::to_string(n) + " particles");
   std::vector<std::pair<std::string, std::string>> f;
   {
-    std::string ids;
-    ids.reserve(n * 32);
-    for (const auto& id : e.ids) ids.append(reinterpret_cast<const char*>(id.data()), id.size());
-    f.emplace_back("particles.ids", std::move(ids));
+    const std::span<const format::Bytes32> ids[] = {e.ids};
+    f.emplace_back("particles.ids", format::bytes32_rows(ids, n));
   }
   {
     std::string t;
@@ -253,17 +256,12 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
   }
   // The record stream's chunks (R1-EPO-017): SHA-256 then leaf, per chunk.
   if (!e.record_chunks.leaves.empty()) {
-    const std::size_t chunks = static_cast<std::size_t>(hemera::leaf_count(e.links * kRecordBytes));
+    const std::size_t chunks = record_chunk_count(e.links);
     if (e.record_chunks.leaves.size() != chunks || e.record_chunks.sha.size() != chunks)
       return Status::internal("epoch: " + std::to_string(e.record_chunks.leaves.size()) + " record chunks for " +
                               std::to_string(e.links) + " links");
-    std::string c;
-    c.reserve(chunks * kChunkRowBytes);
-    for (std::size_t i = 0; i < chunks; ++i) {
-      c.append(reinterpret_cast<const char*>(e.record_chunks.sha[i].data()), e.record_chunks.sha[i].size());
-      c.append(reinterpret_cast<const char*>(e.record_chunks.leaves[i].data()), e.record_chunks.leaves[i].size());
-    }
-    f.emplace_back("records.chunks", std::move(c));
+    const std::span<const format::Bytes32> columns[] = {e.record_chunks.sha, e.record_chunks.leaves};
+    f.emplace_back("records.chunks", format::bytes32_rows(columns, chunks));
   }
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
@@ -541,8 +539,7 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
   EpochFiles files(dir, n);
   R1_TRY(files.load(m.at("files"), keep));
   R1_ASSIGN(const std::string_view ids, files.rows("particles.ids", 32));
-  e.ids.resize(n);
-  for (std::size_t i = 0; i < n; ++i) std::memcpy(e.ids[i].data(), ids.data() + i * 32, 32);
+  e.ids = format::read_bytes32_column(ids, n);
   R1_ASSIGN(const std::string_view focus, files.rows("focus.q32", 8));
   e.focus.phi = read_q32_column(focus, n);
   if (e.domain == NumericDomain::kQ32) {
@@ -608,17 +605,13 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
   if (const InputFile* t = files.find("titles.tsv")) R1_TRY(read_titles(*t, (dir / "titles.tsv").string(), e));
   R1_TRY(read_edges(files, dir / "edges.bin", n, m.at("snapshot").at("layout_edges").get<std::size_t>(), e));
   if (const InputFile* c = files.find("records.chunks")) {
-    const std::size_t chunks = static_cast<std::size_t>(hemera::leaf_count(e.links * kRecordBytes));
+    const std::size_t chunks = record_chunk_count(e.links);
     const std::string_view b = c->text();
     if (b.size() != chunks * kChunkRowBytes)
       return Status::input((dir / "records.chunks").string() + ": " + std::to_string(b.size()) + " bytes for " +
                            std::to_string(e.links) + " links (expected " + std::to_string(chunks * kChunkRowBytes) + ")");
-    e.record_chunks.sha.resize(chunks);
-    e.record_chunks.leaves.resize(chunks);
-    for (std::size_t i = 0; i < chunks; ++i) {
-      std::memcpy(e.record_chunks.sha[i].data(), b.data() + i * kChunkRowBytes, 32);
-      std::memcpy(e.record_chunks.leaves[i].data(), b.data() + i * kChunkRowBytes + 32, 32);
-    }
+    e.record_chunks.sha = format::read_bytes32_column(b, chunks, 2, 0);
+    e.record_chunks.leaves = format::read_bytes32_column(b, chunks, 2, 1);
     // The leaves are the snapshot digest's: a file from another snapshot, or one of leaves that
     // do not make its digest, is not carried into the next epoch's digest.
     if (hemera::root_of_leaves(e.record_chunks.leaves) != e.snapshot_digest)

@@ -400,11 +400,7 @@ void OperatorsQ32::springs(std::span<const Q32> phi, std::vector<Q32>& out) cons
   out.resize(n());
   for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t i = b; i < e; ++i) {
-      i128 num = static_cast<i128>(springs_a_) << 32;
-      for (std::uint64_t k = row_ptr_[i]; k < row_ptr_[i + 1]; ++k) {
-        gather_ahead(phi.data(), col_, k, walk_.size());
-        num += static_cast<i128>(w_[k]) * phi[col_[k]].raw;
-      }
+      const i128 num = (static_cast<i128>(springs_a_) << 32) + dot_row(w_, col_, phi.data(), row_ptr_[i], row_ptr_[i + 1], walk_.size());
       // num is on the 2^-64 scale and mu + d_i on 2^-32, so num / (mu + d_i) is the raw itself.
       const i128 r = fx::detail::rne_div(num, static_cast<i128>(mu_) + degree_[i]);
       if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("focus: springs");

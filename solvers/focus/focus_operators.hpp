@@ -60,7 +60,6 @@ class Shares {
   // One of the two is non-null.
   const std::uint32_t* narrow() const { return narrow_.empty() ? nullptr : narrow_.data(); }
   const std::int64_t* wide() const { return narrow_.empty() ? wide_.data() : nullptr; }
-  std::int64_t operator[](std::size_t k) const { return narrow_.empty() ? wide_[k] : std::int64_t{narrow_[k]}; }
   std::vector<std::int64_t> raws() const;
 
  private:

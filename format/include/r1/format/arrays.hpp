@@ -31,6 +31,12 @@ std::string i128_column(std::span<const i128> v);
 std::vector<i128> read_i128_column(std::string_view b, std::size_t n);
 std::string f64_column(std::span<const double> v);
 std::vector<double> read_f64_column(std::string_view b, std::size_t n);
+// Row-major 32-byte values: row i holds columns[0][i], columns[1][i], ... (particles.ids: one
+// column; records.chunks: SHA-256 and leaf). Every column has `rows` entries.
+using Bytes32 = std::array<std::uint8_t, 32>;
+std::string bytes32_rows(std::span<const std::span<const Bytes32>> columns, std::size_t rows);
+// Entry k of each of n rows of `stride` 32-byte values.
+std::vector<Bytes32> read_bytes32_column(std::string_view b, std::size_t n, std::size_t stride = 1, std::size_t k = 0);
 // Row-major u32: row i holds columns[0][i], columns[1][i], ... (clusters.u32: one per level).
 std::string u32_rows(std::span<const std::vector<std::uint32_t>> columns, std::size_t rows);
 
