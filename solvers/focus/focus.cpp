@@ -199,13 +199,21 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
   const bool use_d = p.lambda_d.raw != 0, use_s = p.lambda_s.raw != 0, use_h = p.lambda_h.raw != 0;
   const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
   const bool offset = !heat_offset.empty();
-  std::vector<Q32> d, s, h, v(active);
+  std::vector<Q32> d, s, h, v(active), walk;
   focus::HeatScratch scratch;
+  // The springs and the heat kernel's first product N phi gather phi over the same rows: one pass
+  // serves both (R1-FOC-090) where the heat kernel has a first product.
+  const bool together = use_s && use_h && heat.q32.size() > 1 && !ops.on_products();
   for (std::uint32_t step = 0; step < steps; ++step) {
     // A zero-weight operator contributes exactly 0 and is skipped (R1-FOC-050).
     if (use_d) ops.diffusion(phi, d);
-    if (use_s) ops.springs(phi, s);
-    if (use_h) focus::heat_q32(ops, heat, phi, h, &scratch);
+    if (together) {
+      ops.springs_and_walk(phi, s, walk);
+      focus::heat_q32(ops, heat, phi, h, &scratch, &walk);
+    } else {
+      if (use_s) ops.springs(phi, s);
+      if (use_h) focus::heat_q32(ops, heat, phi, h, &scratch);
+    }
     focus::for_rows(parallel, active, [&](std::uint32_t b, std::uint32_t e) {
       for (std::uint32_t i = b; i < e; ++i) {
         i128 acc = 0;  // three products below 2^96: exact

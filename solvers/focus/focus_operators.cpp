@@ -399,14 +399,31 @@ void OperatorsQ32::diffusion(std::span<const Q32> phi, std::vector<Q32>& out) co
 void OperatorsQ32::springs(std::span<const Q32> phi, std::vector<Q32>& out) const {
   out.resize(n());
   for_rows(parallel_, fixed_from(), [&](std::uint32_t b, std::uint32_t e) {
-    for (std::uint32_t i = b; i < e; ++i) {
-      const i128 num = (static_cast<i128>(springs_a_) << 32) + dot_row(w_, col_, phi.data(), row_ptr_[i], row_ptr_[i + 1], walk_.size());
-      // num is on the 2^-64 scale and mu + d_i on 2^-32, so num / (mu + d_i) is the raw itself.
-      const i128 r = fx::detail::rne_div(num, static_cast<i128>(mu_) + degree_[i]);
-      if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("focus: springs");
-      out[i] = Q32::from_raw(static_cast<std::int64_t>(r));
-    }
+    for (std::uint32_t i = b; i < e; ++i)
+      out[i] = Q32::from_raw(springs_value(i, dot_row(w_, col_, phi.data(), row_ptr_[i], row_ptr_[i + 1], walk_.size())));
   });
+}
+
+void OperatorsQ32::springs_and_walk(std::span<const Q32> phi, std::vector<Q32>& s, std::vector<Q32>& nphi) const {
+  if (dev_walk_ != nullptr) throw std::logic_error("focus: springs_and_walk on the products");
+  s.resize(n());
+  nphi.resize(n());
+  // The springs on fixed_from()'s rows (the others are never used), N phi on all.
+  const std::uint32_t springs_rows = fixed_from();
+  const auto rows = [&](const auto* shares) {
+    for_rows(parallel_, n(), [&](std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        const std::uint64_t rb = row_ptr_[i], re = row_ptr_[i + 1];
+        i128 ws = 0, ns = 0;
+        if (rb != re) dot_row2(w_, shares, col_, phi.data(), rb, re, walk_.size(), ws, ns);
+        // An empty row is a fixed point of the walk (R1-FOC-041).
+        nphi[i] = rb == re ? phi[i] : Q32::from_raw(round_q32(ns));
+        if (i < springs_rows) s[i] = Q32::from_raw(springs_value(i, ws));
+      }
+    });
+  };
+  if (walk_.narrow() != nullptr) rows(walk_.narrow());
+  else rows(walk_.wide());
 }
 
 void OperatorsQ32::walk(std::span<const Q32> x, std::vector<Q32>& out) const {

@@ -83,6 +83,23 @@ inline i128 dot_row(const Shares& w, const std::uint32_t* col, const Q32* x, std
   return w.narrow() != nullptr ? dot_row(w.narrow(), col, x, b, e, w.size()) : dot_row(w.wide(), col, x, b, e, w.size());
 }
 
+// The sums of the springs and the walk over entries [b, e) of A_sym's row, each gathered
+// x[col[k]] serving both (R1-FOC-090): sum_k w[k] x and sum_k v[k] x, exactly (raws; `end` bounds
+// the prefetch).
+template <class V>
+inline void dot_row2(const std::int64_t* w, const V* v, const std::uint32_t* col, const Q32* x, std::uint64_t b,
+                     std::uint64_t e, std::uint64_t end, i128& sum_w, i128& sum_v) {
+  i128 acc_w = 0, acc_v = 0;
+  for (std::uint64_t k = b; k < e; ++k) {
+    gather_ahead(x, col, k, end);
+    const std::int64_t xk = x[col[k]].raw;
+    acc_w += static_cast<i128>(w[k]) * xk;
+    acc_v += static_cast<i128>(static_cast<std::int64_t>(v[k])) * xk;
+  }
+  sum_w = acc_w;
+  sum_v = acc_v;
+}
+
 // A backend's product failed (R1-FOC-092): the stage reports it as an internal error.
 struct ProductError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -148,6 +165,10 @@ class OperatorsQ32 {
   // The heat kernel's step on the products (on_products()): out_i = RNE(2 (N t)_i - prev_i), as
   // heat_q32's row loop computes it (R1-FOC-043).
   void chebyshev_step(std::span<const Q32> t, std::span<const Q32> prev, std::vector<Q32>& out) const;
+  // S(phi) and N phi, the values of springs() and walk(), in one pass over A_sym's rows, each
+  // gathered phi_j serving both sums: a step's cost on graphs past the caches is its gathers
+  // (R1-FOC-090). Not on the products (on_products()).
+  void springs_and_walk(std::span<const Q32> phi, std::vector<Q32>& s, std::vector<Q32>& nphi) const;
 
   // sum_j N(i, j) x_j exactly, on the 2^-64 scale (x_i * 2^32 for an isolated particle).
   i128 walk_row(std::uint32_t i, const Q32* x) const {
@@ -159,6 +180,14 @@ class OperatorsQ32 {
 
  private:
   void set_constants(const TriKernelParams& params, std::uint32_t particles);
+  // S(phi)_i's raw from sum_j w(i, j) phi_j (exact, raws on the 2^-64 scale), R1-FOC-030.
+  std::int64_t springs_value(std::uint32_t i, i128 weighted) const {
+    const i128 num = (static_cast<i128>(springs_a_) << 32) + weighted;
+    // num is on the 2^-64 scale and mu + d_i on 2^-32, so num / (mu + d_i) is the raw itself.
+    const i128 r = fx::detail::rne_div(num, static_cast<i128>(mu_) + degree_[i]);
+    if (!fx::detail::fits_i64(r)) fx::detail::throw_overflow("focus: springs");
+    return static_cast<std::int64_t>(r);
+  }
 
   FocusPattern pattern_;
   bool parallel_ = false;

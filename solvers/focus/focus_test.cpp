@@ -637,6 +637,41 @@ RC_GTEST_PROP(FocusUpdate, RegionHeatIsThePlainRecurrence, ()) {
   RC_ASSERT(fast == t0);
 }
 
+// The focus step forms S(phi) and N phi in one pass (R1-FOC-090): springs_and_walk gives
+// springs()'s and walk()'s values, serially and on TBB rows, on the whole graph's operators and a
+// region's (whose ring rows are empty), and the heat kernel given that N phi is the heat kernel.
+RC_GTEST_PROP(FocusOperators, SpringsAndWalkInOnePassAreTheirOwnValues, ()) {
+  const Graph g = random_graph();
+  const TriKernelParams p = random_params();
+  const bool local = *rc::gen::arbitrary<bool>();
+  const bool parallel = *rc::gen::arbitrary<bool>();
+  std::vector<Q32> phi(g.n);
+  for (auto& x : phi) x = Q32::from_raw(*rc::gen::inRange<std::int64_t>(1, ONE));
+  std::vector<std::uint32_t> region, global;
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    if (*rc::gen::inRange(0, 2) == 0) region.push_back(i);
+  if (region.empty()) region.push_back(0);
+  const auto ops = local ? r1::focus::OperatorsQ32::build_local(g, p, parallel, region, phi, global)
+                         : r1::focus::OperatorsQ32::build(g, p, parallel);
+  RC_ASSERT(ops.is_ok());
+  std::vector<Q32> x = phi;
+  if (local) {
+    x.resize(global.size());
+    for (std::size_t a = 0; a < global.size(); ++a) x[a] = phi[global[a]];
+  }
+  std::vector<Q32> s, nx, s_alone, nx_alone;
+  ops->springs_and_walk(x, s, nx);
+  ops->springs(x, s_alone);
+  ops->walk(x, nx_alone);
+  RC_ASSERT(nx == nx_alone);
+  for (std::uint32_t i = 0; i < ops->fixed_from(); ++i) RC_ASSERT(s[i] == s_alone[i]);
+  const r1::HeatCoefficients coeff = r1::heat_coefficients(p.tau, p.chebyshev_degree);
+  std::vector<Q32> h_given, h_alone;
+  r1::focus::heat_q32(*ops, coeff, x, h_given, nullptr, &nx);
+  r1::focus::heat_q32(*ops, coeff, x, h_alone);
+  RC_ASSERT(h_given == h_alone);
+}
+
 RC_GTEST_PROP(FocusUpdate, ConservesPositiveAndFreezesOutside, ()) {
   const Graph g = random_graph();
   const TriKernelParams p = random_params();

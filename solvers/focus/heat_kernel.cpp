@@ -92,7 +92,7 @@ HeatCoefficients heat_coefficients(Q32 tau, std::uint32_t degree) {
 namespace focus {
 
 void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<const Q32> x, std::vector<Q32>& out,
-              HeatScratch* scratch) {
+              HeatScratch* scratch, const std::vector<Q32>* walk_of_x) {
   const std::uint32_t n = ops.n();
   // Rows from m on are empty (build_local's ring): N x = x there, so within a sub-step every t_k
   // equals t_0 on them, and their sum is (sum_k c_k) t_0, exactly as the recurrence computes it
@@ -138,7 +138,8 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
         for (std::uint32_t i = b; i < e; ++i) {
           acc[i] = static_cast<i128>(c0) * t0[i].raw;
           if (terms == 1) continue;
-          t1[i] = Q32::from_raw(round_q32(ops.walk_row(i, t0.data())));  // t_1 = N t_0
+          // t_1 = N t_0, the caller's in the first sub-step when it formed it.
+          t1[i] = sub == 0 && walk_of_x != nullptr ? (*walk_of_x)[i] : Q32::from_raw(round_q32(ops.walk_row(i, t0.data())));
           acc[i] += static_cast<i128>(c1) * t1[i].raw;
         }
       });

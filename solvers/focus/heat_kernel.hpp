@@ -18,8 +18,10 @@ struct HeatScratch {
   std::vector<Q32> t0, t1, t2;
   std::vector<i128> acc;
 };
+// `walk_of_x`, when given, is N x as OperatorsQ32::walk computes it (the focus step forms it with
+// the springs, OperatorsQ32::springs_and_walk): the first sub-step's t_1.
 void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<const Q32> x, std::vector<Q32>& out,
-              HeatScratch* scratch = nullptr);
+              HeatScratch* scratch = nullptr, const std::vector<Q32>* walk_of_x = nullptr);
 // The same in doubles: t_(k+1) = 2 N t_k - t_(k-1), h = c_0 t_0 + ... + c_K t_K left to right.
 void heat_f64(const OperatorsF64& ops, const HeatCoefficients& coeff, std::span<const double> x, std::vector<double>& out);
 
