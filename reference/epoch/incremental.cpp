@@ -510,7 +510,10 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
   const auto batch_start = std::chrono::steady_clock::now();
-  const Rows pr = prev_rows(prev);
+  Rows pr = prev_rows(prev);
+  // PREV's layout edges live on as these rows; the list itself (24 bytes an edge, 240 MB at 10^7
+  // links) is not read again (R1-EPO-005).
+  std::vector<LayoutEdge>().swap(prev.edges);
   R1_ASSIGN(EditBatch batch, batch_of(prev, next, g, prev_name, pr));
   const std::size_t n = g.n;
 
@@ -533,6 +536,7 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
 
   // The full solve, aligned to the earlier epoch's anchor (R1-INC-034).
   auto full = [&](std::string reason) -> Result<Epoch> {
+    pr = Rows{};  // not read by the full solve, whose basis is the epoch's peak (R1-EPO-005)
     EpochOptions o = options;
     o.anchor = prev_anchor;
     o.anchor_name = prev_name + "/anchor.bin";
@@ -645,6 +649,7 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     spectral::image_and_sums(op, out, shift, image, base, options.parallel);
     for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], -1, base);
   }
+  pr = Rows{};  // PREV's rows are not read after this (416 MB at 10^7 links)
   Sums sums = base;
   for (const std::uint32_t i : rows) spectral::add_row_sums(out, shift, i, &image[std::size_t{i} * 5], 1, sums);
   const Residuals before_update = residuals_of(sums, n, shift);
