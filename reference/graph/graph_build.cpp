@@ -112,7 +112,15 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
   }
   R1_TRY(compress_rows(out_ptr, out, s.source));
 
-  // A_sym: every directed (i, j, w, a2) appears as (i, j, w, a2) and (j, i, w, -a2).
+  // A_sym: every directed (i, j, w, a2) appears as (i, j, w, a2) and (j, i, w, -a2). Its entries
+  // are first references to A0's (16 bytes each, not 48: the load's peak at 10^7 links), sorted by
+  // column within each row; the entries of one column (a link each way) are then summed exactly
+  // from A0's weights, once to find the scale and once to write the Q32 values (R1-IN-052).
+  struct SymRef {
+    std::uint32_t col;
+    std::uint32_t mirrored;  // 1: the entry (j, i) of A0's (i, j), with -a2
+    std::uint64_t out;       // index of the A0 entry
+  };
   std::vector<std::uint64_t> sym_ptr(n + 1, 0);
   for (std::size_t i = 0; i < n; ++i)
     for (std::uint64_t k = out_ptr[i]; k < out_ptr[i + 1]; ++k) {
@@ -120,20 +128,44 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
       ++sym_ptr[out[k].col + 1];
     }
   std::partial_sum(sym_ptr.begin(), sym_ptr.end(), sym_ptr.begin());
-  std::vector<Entry> sym(sym_ptr[n]);
+  std::vector<SymRef> sym(sym_ptr[n]);
   {
     std::vector<std::uint64_t> fill(sym_ptr.begin(), sym_ptr.end() - 1);
     for (std::size_t i = 0; i < n; ++i)
       for (std::uint64_t k = out_ptr[i]; k < out_ptr[i + 1]; ++k) {
-        const Entry& e = out[k];
-        sym[fill[i]++] = Entry{e.col, e.w, e.a2};
-        sym[fill[e.col]++] = Entry{static_cast<std::uint32_t>(i), e.w, -e.a2};
+        sym[fill[i]++] = SymRef{out[k].col, 0, k};
+        sym[fill[out[k].col]++] = SymRef{static_cast<std::uint32_t>(i), 1, k};
       }
   }
-  R1_TRY(compress_rows(sym_ptr, sym, s.source));
-
+  for (std::size_t i = 0; i < n; ++i)
+    std::sort(sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i]), sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i + 1]),
+              [](const SymRef& a, const SymRef& b) { return a.col < b.col; });
+  // Calls emit(col, w, a2) for the merged entries of row i in column order: exact sums.
+  const auto merged_row = [&](std::size_t i, const auto& emit) -> Status {
+    for (std::uint64_t k = sym_ptr[i]; k < sym_ptr[i + 1];) {
+      const std::uint32_t col = sym[k].col;
+      u128 w = 0;
+      i128 a2 = 0;
+      for (; k < sym_ptr[i + 1] && sym[k].col == col; ++k) {
+        const Entry& e = out[sym[k].out];
+        if (w != 0 && e.w >= kWeightLimit - w)
+          return Status::input(s.source + ": summed link weight of one particle pair reaches 2^127");
+        w += e.w;
+        a2 += sym[k].mirrored != 0 ? -e.a2 : e.a2;  // |a2| <= w < 2^127: no overflow
+      }
+      emit(col, w, a2);
+    }
+    return Status::ok();
+  };
+  std::vector<std::uint64_t> row_ptr(n + 1, 0);
   g.weight_scale = 0;
-  for (const Entry& e : sym) g.weight_scale = std::max(g.weight_scale, e.w);
+  for (std::size_t i = 0; i < n; ++i) {
+    R1_TRY(merged_row(i, [&](std::uint32_t, u128 w, i128) {
+      ++row_ptr[i + 1];
+      g.weight_scale = std::max(g.weight_scale, w);
+    }));
+    row_ptr[i + 1] += row_ptr[i];
+  }
   if (g.weight_scale == 0) return Status::input(s.source + ": every link has weight zero");
 
   // Normalise to Q32 (R1-IN-052): weights round to at least one unit so links never vanish.
@@ -142,15 +174,20 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
     const std::int64_t m = a == 0 ? 0 : scale_to_q32(static_cast<u128>(a < 0 ? -a : a), g.weight_scale);
     return a < 0 ? -m : m;
   };
-  g.row_ptr = std::move(sym_ptr);
-  g.col.resize(sym.size());
-  g.w.resize(sym.size());
-  g.a2.resize(sym.size());
-  for (std::size_t k = 0; k < sym.size(); ++k) {
-    g.col[k] = sym[k].col;
-    g.w[k] = to_q32(sym[k].w);
-    g.a2[k] = to_q32_signed(sym[k].a2);
+  g.col.resize(row_ptr[n]);
+  g.w.resize(row_ptr[n]);
+  g.a2.resize(row_ptr[n]);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t k = row_ptr[i];
+    R1_TRY(merged_row(i, [&](std::uint32_t col, u128 w, i128 a2) {
+      g.col[k] = col;
+      g.w[k] = to_q32(w);
+      g.a2[k] = to_q32_signed(a2);
+      ++k;
+    }));
   }
+  g.row_ptr = std::move(row_ptr);
+  std::vector<SymRef>().swap(sym);
   g.out_ptr = std::move(out_ptr);
   g.out_col.resize(out.size());
   g.out_w.resize(out.size());

@@ -85,6 +85,40 @@ TEST(GraphBuild, NoLinksAndOnlySelfLoopsAreErrors) {
   EXPECT_NE(r.status().message().find("no links besides 1 self-loops"), std::string::npos);
 }
 
+// A_sym sums a pair's links in both directions exactly, from A0's weights; a sum that reaches
+// 2^127 is an input error although each link's weight is below it.
+TEST(GraphBuild, BothDirectionsSumExactlyAndTheirOverflowIsAnError) {
+  const auto huge = [](u128 amount) {
+    r1::SnapshotBuilder b("test");
+    b.snapshot().config = r1::text_input_config();
+    for (const auto& [from, to] : {std::pair{"a", "b"}, std::pair{"b", "a"}, std::pair{"b", "c"}}) {
+      r1::Link k;
+      k.height = 1;
+      k.amount = amount;
+      k.valence = 1;
+      k.from = b.particle_by_name(from);
+      k.to = b.particle_by_name(to);
+      b.add_link(k);
+    }
+    return std::move(b.finish()).value();
+  };
+  // Each weight (amount x 1000 per mille) is just above 2^126: the pair a-b sums past 2^127.
+  auto r = r1::build_graph(huge((u128{1} << 126) / 1000 + 1));
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("summed link weight of one particle pair reaches 2^127"), std::string::npos)
+      << r.status().message();
+  // Just below 2^125 each: the pair sums exactly to the scale (a-b is 1.0, b-c one half) and its
+  // A2 cancels to 0.
+  const u128 amount = (u128{1} << 125) / 1000 - 1;
+  auto ok = r1::build_graph(huge(amount));
+  ASSERT_TRUE(ok.is_ok()) << ok.status().message();
+  EXPECT_EQ(ok->weight_scale, 2 * amount * 1000);
+  EXPECT_EQ(entry(*ok, ok->w, 0, 1), ONE);
+  EXPECT_EQ(entry(*ok, ok->w, 1, 2), ONE / 2);
+  EXPECT_EQ(entry(*ok, ok->a2, 0, 1), 0);
+  EXPECT_EQ(entry(*ok, ok->a2, 2, 1), -(ONE / 2));
+}
+
 TEST(GraphBuild, ScaleToQ32MatchesCppIntForHugeValues) {
   using boost::multiprecision::cpp_int;
   const u128 scale = (u128{1} << 126) + 12345;
