@@ -115,7 +115,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
   // A_sym: every directed (i, j, w, a2) appears as (i, j, w, a2) and (j, i, w, -a2). Its entries
   // are first references to A0's (16 bytes each, not 48: the load's peak at 10^7 links), sorted by
   // column within each row; the entries of one column (a link each way) are then summed exactly
-  // from A0's weights, once to find the scale and once to write the Q32 values (R1-IN-052).
+  // from A0's weights, once to find the scale and once to write the Q32 values (R1-IN-054).
   struct SymRef {
     std::uint32_t col;
     std::uint32_t mirrored;  // 1: the entry (j, i) of A0's (i, j), with -a2
