@@ -186,17 +186,19 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   std::optional<render::NeuralField> prev_field;
   std::vector<hemera::Digest> prev_ids;
   render::Scene prev_scene;
-  // The snapshot's digest and its record chunks, formed below before the stages (R1-EPO-005).
+  // The snapshot's digest and its record chunks before the stages, with PREV's chunk leaves where
+  // the chunks are PREV's (R1-EPO-017); then the link records go: nothing after the digest and
+  // the layout graph reads them, and the stages' peak is what they would add to (R1-EPO-005).
   RecordChunks chunks;
-  if (c.from.empty()) {
-    // The digest now, then the link records go: nothing after the digest and the layout graph
-    // reads them, and the spectral stage's basis is the peak they would add to (R1-EPO-005).
+  const auto digest_and_drop_links = [&](const RecordChunks* previous) {
     const auto td = std::chrono::steady_clock::now();
-    o.snapshot_digest = snapshot_digest(s, chunks);
+    o.snapshot_digest = snapshot_digest(s, chunks, previous);
     o.snapshot_digest_seconds = seconds_since(td);
     std::vector<Link>().swap(s.links);
+  };
+  if (c.from.empty()) {
+    digest_and_drop_links(nullptr);
     R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
-    e.record_chunks = std::move(chunks);
   } else {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034). `previous`
     // is the wait for PREV beyond the snapshot's read.
@@ -204,12 +206,7 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     R1_ASSIGN(Epoch prev, prev_read.get());
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
-    // The digest now, with PREV's chunk leaves where the chunks are PREV's (R1-EPO-017), and then
-    // the link records go, as above: the update reads the layout graph, not the records.
-    const auto td = std::chrono::steady_clock::now();
-    o.snapshot_digest = snapshot_digest(s, chunks, &prev.record_chunks);
-    o.snapshot_digest_seconds = seconds_since(td);
-    std::vector<Link>().swap(s.links);
+    digest_and_drop_links(&prev.record_chunks);
     const std::string prev_nrf = (std::filesystem::path(c.from) / "field.nrf").string();
     if (c.field && std::filesystem::exists(prev_nrf)) {
       R1_ASSIGN(const auto in, InputFile::open(prev_nrf));
@@ -220,8 +217,8 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     }
     uo.force_full = c.full;
     R1_ASSIGN(e, run_epoch_from(std::move(prev), anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
-    e.record_chunks = std::move(chunks);
   }
+  e.record_chunks = std::move(chunks);
   e.timings.insert(e.timings.begin(), {"read", read_s});
   // Reading and checking the earlier epoch (every file against its digest) is part of the update.
   if (!c.from.empty()) e.timings.insert(e.timings.begin() + 1, {"previous", previous_s});

@@ -22,6 +22,15 @@ struct Entry {
 // Exact weights (single or summed) must stay below 2^127 so that A2, bounded by them, fits i128.
 constexpr u128 kWeightLimit = u128{1} << 127;
 
+// Adds an entry's exact weight and A2 to a pair's running sums; an input error when the summed
+// weight would reach kWeightLimit.
+Status add_to_pair(u128& w, i128& a2, u128 add_w, i128 add_a2, const std::string& source) {
+  if (add_w >= kWeightLimit - w) return Status::input(source + ": summed link weight of one particle pair reaches 2^127");
+  w += add_w;
+  a2 += add_a2;  // |a2| <= w < 2^127: no overflow
+  return Status::ok();
+}
+
 // Sorts each row by column and merges equal columns (parallel links, both directions), exactly.
 Status compress_rows(std::vector<std::uint64_t>& ptr, std::vector<Entry>& e, const std::string& source) {
   const std::size_t n = ptr.size() - 1;
@@ -33,10 +42,7 @@ Status compress_rows(std::vector<std::uint64_t>& ptr, std::vector<Entry>& e, con
     const std::uint64_t row_start = out;
     for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) {
       if (out > row_start && e[out - 1].col == e[k].col) {
-        if (e[k].w >= kWeightLimit - e[out - 1].w)
-          return Status::input(source + ": summed link weight of one particle pair reaches 2^127");
-        e[out - 1].w += e[k].w;
-        e[out - 1].a2 += e[k].a2;  // |a2| <= w < 2^127: no overflow
+        R1_TRY(add_to_pair(e[out - 1].w, e[out - 1].a2, e[k].w, e[k].a2, source));
       } else {
         e[out++] = e[k];
       }
@@ -148,10 +154,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
       i128 a2 = 0;
       for (; k < sym_ptr[i + 1] && sym[k].col == col; ++k) {
         const Entry& e = out[sym[k].out];
-        if (w != 0 && e.w >= kWeightLimit - w)
-          return Status::input(s.source + ": summed link weight of one particle pair reaches 2^127");
-        w += e.w;
-        a2 += sym[k].mirrored != 0 ? -e.a2 : e.a2;  // |a2| <= w < 2^127: no overflow
+        R1_TRY(add_to_pair(w, a2, e.w, sym[k].mirrored != 0 ? -e.a2 : e.a2, s.source));
       }
       emit(col, w, a2);
     }
