@@ -6,6 +6,7 @@
 #include <cstring>
 #include <memory>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -421,10 +422,9 @@ void run_batch(const Graph& g, BatchWorkspace& b, std::unique_ptr<Workspace>& si
     if ((b.redo >> k) & 1u) redo_lane(g, b, k, single);
 }
 
-// B(v) += delta_s(v) for every reached v != s, lanes (sources) ascending; then clears the batch.
-void add_batch(BatchWorkspace& b, std::vector<double>& acc) {
-  const std::uint32_t n = static_cast<std::uint32_t>(acc.size());
-  for (std::uint32_t v = 0; v < n; ++v) {
+// add_batch over the particles [lo, hi).
+void add_batch_range(BatchWorkspace& b, std::vector<double>& acc, std::uint32_t lo, std::uint32_t hi) {
+  for (std::uint32_t v = lo; v < hi; ++v) {
     Cell& c = b.cell[v];
     const std::uint64_t lv = c.level;
     if (lv == kNoLane) continue;
@@ -432,6 +432,20 @@ void add_batch(BatchWorkspace& b, std::vector<double>& acc) {
     for (std::uint32_t k = 0; k < b.lanes; ++k)
       if (((lv >> (8 * k)) & 0xFF) != kUnreached && v != b.source[k]) acc[v] += dv[k];
     c = Cell{};
+  }
+}
+
+// B(v) += delta_s(v) for every reached v != s, lanes (sources) ascending; then clears the batch.
+// Each particle's sum is its own, so ranges of particles may run on workers (the same bits).
+void add_batch(BatchWorkspace& b, std::vector<double>& acc, bool parallel) {
+  const std::uint32_t n = static_cast<std::uint32_t>(acc.size());
+  constexpr std::uint32_t kGrain = 1u << 14;
+  if (parallel && n > kGrain) {
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kGrain), [&](const tbb::blocked_range<std::uint32_t>& r) {
+      add_batch_range(b, acc, r.begin(), r.end());
+    });
+  } else {
+    add_batch_range(b, acc, 0, n);
   }
 }
 
@@ -475,8 +489,13 @@ std::vector<double> betweenness_from_sources(const Graph& g, std::span<const std
       }
     }
   } else {
-    // Batch i holds sources [7 i, 7 i + 7) of the sorted list: a fixed split.
+    // Consecutive slices of the sorted list, as few batches as 7 lanes allow and their sizes
+    // within one of each other (51 sources: 7, 7, 7, 6, 6, 6, 6, 6), so the batches that run side
+    // by side take about the same time; B is added batch after batch, each lane ascending, so
+    // the sum runs over the sources in ascending order whatever the split.
     const std::size_t batches = (sources.size() + kLanes - 1) / kLanes;
+    const std::size_t base = sources.size() / batches, extra = sources.size() % batches;
+    const auto batch_first = [&](std::size_t i) { return i * base + std::min(i, extra); };
     std::vector<BatchWorkspace> ws;
     std::vector<std::unique_ptr<Workspace>> single(std::min(slots, batches));
     ws.reserve(single.size());
@@ -485,15 +504,15 @@ std::vector<double> betweenness_from_sources(const Graph& g, std::span<const std
       const std::size_t count = std::min(ws.size(), batches - first);
       auto one = [&](std::size_t i) {
         BatchWorkspace& b = ws[i];
-        const std::size_t lo = (first + i) * kLanes;
-        b.lanes = static_cast<std::uint32_t>(std::min<std::size_t>(kLanes, sources.size() - lo));
+        const std::size_t lo = batch_first(first + i);
+        b.lanes = static_cast<std::uint32_t>(batch_first(first + i + 1) - lo);
         for (std::uint32_t k = 0; k < b.lanes; ++k) b.source[k] = sources[lo + k];
         run_batch(g, b, single[i]);
       };
       if (count > 1) tbb::parallel_for(std::size_t{0}, count, one);
       else one(0);
       for (std::size_t i = 0; i < count; ++i) {
-        add_batch(ws[i], acc);
+        add_batch(ws[i], acc, run.parallel);
         done += ws[i].lanes;
         report(progress, "betweenness", done, sources.size());
       }

@@ -228,7 +228,7 @@ TEST(Betweenness, BatchedAndParallelGiveTheSameBits) {
     SCOPED_TRACE(c.name);
     const auto s = std::move(r1::generate(c.params)).value();
     const auto g = graph_of(s);
-    // 23 pivots: three full batches and one of two; the corner and the centre for the grid.
+    // 26 sources: four batches of 7, 7, 6 and 6 (R1-ENC-021); the corner and the centre for the grid.
     std::vector<std::uint32_t> src = r1::choose_pivots(s.particles, 23);
     src.push_back(0);
     src.push_back(g.n / 2 + 20);
