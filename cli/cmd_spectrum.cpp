@@ -31,6 +31,7 @@ struct SpectrumOptions {
   double tolerance = SpectralParams{}.tolerance;
   std::uint32_t basis = SpectralParams{}.basis;
   std::uint32_t max_restarts = 0;
+  std::uint32_t filter_degree = SpectralParams{}.filter_degree;
   bool parallel = false;
   bool json = false;
   std::string vectors, laplacian;
@@ -76,6 +77,7 @@ Status report_spectrum(const SpectrumOptions& o, const Graph& g, const Spectrum<
                         {"matvecs", s.matvecs},
                         {"block_applications", s.passes},
                         {"tolerance", o.tolerance},
+                        {"filter_degree", o.filter_degree},
                         {"load_s", load_s},
                         {"solve_s", solve_s},
                         {"peak_rss_mib", peak_rss_mib()}};
@@ -112,6 +114,7 @@ Status run_spectrum(const SpectrumOptions& o) {
   p.tolerance = o.tolerance;
   p.basis = o.basis;
   p.max_restarts = o.max_restarts;
+  p.filter_degree = o.filter_degree;
   SpectralOptions so;
   so.parallel = o.parallel;
   if (!o.laplacian.empty()) {
@@ -151,7 +154,8 @@ void add_spectrum(CLI::App& app, Runner& selected) {
   cmd->add_option("--domain", o->domain, "q32 (canonical, default) or fp64");
   cmd->add_option("--rho", o->rho, "regularisation rho >= 0 (default: 0 if connected, else the mean weighted degree)");
   cmd->add_option("--tolerance", o->tolerance, "residual target ||L u - lambda u|| (default 1e-9)");
-  cmd->add_option("--basis", o->basis, "block Krylov steps per restart cycle (7 vectors each), 4..200 (default 27)");
+  cmd->add_option("--basis", o->basis, "block Krylov steps per restart cycle (7 vectors each), 4..200 (default 14)");
+  cmd->add_option("--filter-degree", o->filter_degree, "Chebyshev filter degree after the first cycle, 0..64 (default 12; 0: none)");
   cmd->add_option("--max-restarts", o->max_restarts, "restart cap (default 0: the solver's own, 1000)");
   cmd->add_flag("--parallel", o->parallel, "TBB kernels (bit-identical to the serial default)");
   cmd->add_flag("--json", o->json, "print one JSON object");

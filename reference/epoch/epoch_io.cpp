@@ -295,6 +295,7 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
                      {"chebyshev_degree", t.chebyshev_degree},
                      {"rho", e.spectral_params.rho ? json(*e.spectral_params.rho) : json("auto")},
                      {"basis", e.spectral_params.basis},
+                     {"filter_degree", e.spectral_params.filter_degree},
                      {"tolerance", e.spectral_params.tolerance},
                      {"overlay", e.encoding.overlay},
                      {"radius_scale", e.encoding.radius_scale},
@@ -527,6 +528,8 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
   tk.chebyshev_degree = pj.at("chebyshev_degree").get<std::uint32_t>();
   if (pj.at("rho").is_number()) e.spectral_params.rho = pj.at("rho").get<double>();
   e.spectral_params.basis = pj.at("basis").get<std::uint32_t>();
+  // Epochs written before the filter (R1-SPEC-080) ran without it.
+  e.spectral_params.filter_degree = pj.value("filter_degree", std::uint32_t{0});
   e.spectral_params.tolerance = pj.at("tolerance").get<double>();
   if (m.contains("update")) e.update = update_from(m.at("update"));
   if (m.at("focus").contains("plogp")) {

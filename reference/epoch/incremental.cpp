@@ -463,7 +463,8 @@ bool same_parameters(const Epoch& prev, const EpochOptions& o) {
                   a.teleport == b.teleport && a.mu == b.mu && a.tau == b.tau && a.eps == b.eps &&
                   a.max_steps == b.max_steps && a.chebyshev_degree == b.chebyshev_degree;
   const SpectralParams &c = prev.spectral_params, &d = o.spectral;
-  return tk && c.rho == d.rho && c.basis == d.basis && c.tolerance == d.tolerance;
+  return tk && c.rho == d.rho && c.basis == d.basis && c.tolerance == d.tolerance &&
+         c.filter_degree == d.filter_degree;
 }
 
 std::string fmt(double x) {

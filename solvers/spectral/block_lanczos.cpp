@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -20,7 +21,7 @@ namespace r1::spectral {
 // kernel would map and clear again every time.
 template <class Scalar>
 struct CompactBlocks {
-  std::vector<Scalar> x, y;
+  std::vector<Scalar> x, y, z;
 };
 
 // Columns dst.. <- L~ columns src.. (count of each, dst and src runs disjoint). The operator
@@ -185,9 +186,49 @@ class Solver {
   }
 
   void apply(Col src, Col dst, std::size_t count) {
+    if (filter_.on()) return apply_filtered(src, dst, count);
     apply_compact(op_, ops_, p_, src, dst, count, compact_);
     matvecs_ += static_cast<std::uint32_t>(count);
     ++passes_;
+  }
+  // Columns dst.. <- K columns src.. (R1-SPEC-081): the filter's recurrence on compact blocks, one
+  // block application per degree.
+  void apply_filtered(Col src, Col dst, std::size_t count) {
+    const ChebyshevFilter& f = filter_;
+    const double e = f.e(), c = f.c(), s1 = f.s1(), tau = 2 / s1;
+    const std::size_t n = p_.rows(), b = count, len = n * b;
+    compact_.x.resize(len);
+    compact_.y.resize(len);
+    compact_.z.resize(len);
+    Scalar* cur = compact_.x.data();
+    Scalar* prev = compact_.z.data();
+    Scalar* img = compact_.y.data();
+    for_row_blocks(n, ops_.parallel(), [&](std::size_t lo, std::size_t hi) {
+      for (std::size_t i = lo; i < hi; ++i)
+        for (std::size_t k = 0; k < b; ++k) cur[i * b + k] = p_.at(i, src + k);
+    });
+    auto image = [&](const Scalar* x) {
+      op_.apply_block(x, b, img, b, b, ops_.parallel());
+      matvecs_ += static_cast<std::uint32_t>(b);
+      ++passes_;
+    };
+    // Y1 = -(s1/e) (L X - c X) (Y0 = -X), into prev's buffer; then cur = Y1, prev = X.
+    image(cur);
+    three_term(len, img, cur, prev, -s1 / e, c * s1 / e, 0.0, ops_.parallel());
+    std::swap(cur, prev);
+    double sg = s1;
+    for (std::uint32_t i = 2; i <= f.degree; ++i) {
+      const double sn = 1 / (tau - sg);
+      image(cur);
+      // Y_new = 2 sn/e (L Y - c Y) - sg sn Y_prev, over Y_prev.
+      three_term(len, img, cur, prev, 2 * sn / e, -2 * c * sn / e, i == 2 ? sg * sn : -sg * sn, ops_.parallel());
+      std::swap(cur, prev);
+      sg = sn;
+    }
+    for_row_blocks(n, ops_.parallel(), [&](std::size_t lo, std::size_t hi) {
+      for (std::size_t i = lo; i < hi; ++i)
+        for (std::size_t k = 0; k < b; ++k) p_.at(i, dst + k) = cur[i * b + k];
+    });
   }
 
   void orthonormalize_block(Col w0, const std::vector<Col>& list, std::size_t gap_begin, std::size_t gap_end,
@@ -224,6 +265,7 @@ class Solver {
   // Panel columns: 0 the trivial vector, 1..want the locked slots, [base_, base_ + m) the basis,
   // [next_, next_ + b) the block that continues the basis after its last column, then b scratch.
   const Col base_, next_, scratch_;
+  ChebyshevFilter filter_;
   Panel<Scalar> p_;
   std::vector<Locked> locked_;
   std::vector<Col> free_slots_;
@@ -455,10 +497,11 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
         for (std::size_t j = 0; j < b_; ++j) e = e + r_last[i * b_ + j] * eig.vectors[(mm - b_ + j) * mm + col];
         ss = ss + e * e;
       }
-      estimate[col] = std::sqrt(ss);
+      estimate[col] = filter_.on() ? filter_.residual_estimate(eig.values[col], std::sqrt(ss)) : std::sqrt(ss);
     }
     // ---- locking (R1-SPEC-027..028) ----
     std::size_t nl = 0;
+    bool filter_floor = false;
     for (bool stop = false; !stop && nl < kk;) {
       std::size_t len = 0;
       while (len < b_ && nl + len < kk && estimate[nl + len] <= tol) ++len;
@@ -469,6 +512,9 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
       ++passes_;
       for (std::size_t i = 0; i < len; ++i) {
         if (!(res[i] <= tol) || (locked_.size() >= cfg_.want && !(lam[i] < lambda_want() - tol))) {
+          // Under the filter, a pair whose estimate passed but whose residual does not is at the
+          // floor of K's rounding (R1-SPEC-083).
+          filter_floor = filter_floor || (filter_.on() && !(res[i] <= tol));
           stop = true;
           break;
         }
@@ -476,11 +522,12 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
         ++nl;
       }
     }
-    report(progress_, "spectral embedding: converged pairs", std::min<std::size_t>(locked_.size(), cfg_.want), cfg_.want);
+    report(progress_, filter_.on() ? "spectral embedding (filtered): converged pairs" : "spectral embedding: converged pairs", std::min<std::size_t>(locked_.size(), cfg_.want), cfg_.want);
     // ---- acceptance (R1-SPEC-031) ----
     // Every wanted pair is locked and the smallest Ritz value left in the basis is not below the
     // want-th: this block Krylov space holds nothing better.
-    if (locked_.size() >= cfg_.want && !(eig.values[nl] < lambda_want() - tol)) {
+    if (locked_.size() >= cfg_.want &&
+        !(eig.values[nl] < (filter_.on() ? filter_.value(lambda_want() - tol) : lambda_want() - tol))) {
       out.converged = true;
       break;
     }
@@ -496,6 +543,54 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
         for (std::size_t j = 0; j < len; ++j) offer(base_ + static_cast<Col>(i + j), lam[j], res[j]);
       }
       break;
+    }
+    // ---- the Chebyshev filter (R1-SPEC-080, R1-SPEC-083) ----
+    bool fresh_start = false;
+    if (!filter_.on() && cfg_.filter_degree > 1 && cycle == cfg_.filter_after && mm > cfg_.want) {
+      // a: the first Ritz value from index `filter_index` on that lies above the want-th by 2^-16 of
+      // it; as Ritz values bound the eigenvalues from above, a >= (1 + 2^-16) lambda_w, so no copy
+      // of a wanted eigenvalue sits on the damped interval's edge.
+      const double edge = eig.values[cfg_.want - 1] * (1 + 0x1p-16);
+      std::size_t j = std::max<std::size_t>(cfg_.filter_index, cfg_.want);
+      while (j < mm && !(eig.values[j] >= edge)) ++j;
+      // al: the smallest Ritz value not locked (the locked ones are deflated). The degree: the
+      // highest up to filter_degree whose gain at the smallest Ritz value over the want-th stays
+      // within tol 2^42, so that K's rounding (2^-48 of its largest part) stays below tol
+      // (R1-SPEC-080).
+      const double al = eig.values[nl];
+      if (j < mm && eig.values[j] < 1 && al < eig.values[j]) {
+        const ChebyshevFilter probe{1, eig.values[j], al};
+        const double x0 = (probe.c() - eig.values[0]) / probe.e(), xw = (probe.c() - eig.values[cfg_.want - 1]) / probe.e();
+        std::uint32_t d = 1;
+        double t0 = 1, t1 = x0, w0 = 1, w1 = xw;  // T_d(x0), T_d(xw) by the three-term recurrence
+        while (d < cfg_.filter_degree) {
+          const double t2 = 2 * x0 * t1 - t0, w2 = 2 * xw * w1 - w0;
+          if (!(t2 <= cfg_.tolerance * 0x1p42 * w2)) break;
+          t0 = t1;
+          t1 = t2;
+          w0 = w1;
+          w1 = w2;
+          ++d;
+        }
+        if (d > 1) {
+          filter_ = ChebyshevFilter{d, eig.values[j], al};
+          fresh_start = true;
+        }
+      }
+    } else if (filter_.on() && (filter_floor || cycle >= cfg_.filter_after + cfg_.filter_cycles)) {
+      filter_ = ChebyshevFilter{};  // at K's floor, or the filter's cycles spent: plain cycles from here
+      fresh_start = true;
+    }
+    if (fresh_start) {
+      // A fresh Krylov space from the first b Ritz vectors not locked.
+      ops_.move(p_, col_run(base_, b_), col_run(base_ + static_cast<Col>(nl), b_));
+      // Orthonormal against the trivial and locked vectors again: a start block is never
+      // projected later, and what it keeps along a locked vector K would amplify.
+      std::vector<double> c0, r0;
+      orthonormalize_block(base_, against(0), 0, 0, c0, r0);
+      k = 0;
+      theta.clear();
+      continue;
     }
     // ---- thick restart (R1-SPEC-026) ----
     k = kk - nl;
@@ -516,6 +611,42 @@ LanczosOutcome<Scalar> Solver<Scalar>::run() {
 }
 
 }  // namespace
+
+std::pair<double, double> ChebyshevFilter::value_slope(double lam) const {
+  const double ee = e(), cc = c(), s = s1(), tau = 2 / s;
+  double y0 = -1, d0 = 0, y1 = -(lam - cc) * s / ee, d1 = -s / ee, sg = s;
+  for (std::uint32_t i = 2; i <= degree; ++i) {
+    const double sn = 1 / (tau - sg);
+    const double y2 = 2 * sn / ee * (lam - cc) * y1 - sg * sn * y0;
+    const double d2 = 2 * sn / ee * ((lam - cc) * d1 + y1) - sg * sn * d0;
+    y0 = y1;
+    d0 = d1;
+    y1 = y2;
+    d1 = d2;
+    sg = sn;
+  }
+  return {y1, d1};
+}
+
+double ChebyshevFilter::preimage(double theta) const {
+  double lo = 0, hi = a;
+  for (int it = 0; it < 64; ++it) {
+    const double mid = (lo + hi) / 2;
+    if (value(mid) < theta) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return (lo + hi) / 2;
+}
+
+double ChebyshevFilter::residual_estimate(double theta, double est_k) const {
+  const double band = std::fabs(value(a));
+  if (!(theta < -band)) return std::numeric_limits<double>::infinity();
+  const double slope = std::fabs(value_slope(preimage(theta)).second);
+  return est_k * std::max(1 / slope, 2 / (std::fabs(theta) - band));
+}
 
 BlockLanczosConfig canonical_config(std::uint32_t n, std::uint32_t want, const SpectralParams& params, std::uint64_t seed) {
   // Default cap on restarts when SpectralParams::max_restarts is 0 (R1-SPEC-034): far above the
@@ -540,6 +671,7 @@ BlockLanczosConfig canonical_config(std::uint32_t n, std::uint32_t want, const S
   cfg.tolerance = params.tolerance;
   cfg.max_cycles = (params.max_restarts == 0 ? kDefaultMaxRestarts : params.max_restarts) + 1;
   cfg.seed = seed;
+  cfg.filter_degree = params.filter_degree;
   return cfg;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "r1/solvers/panel.hpp"
@@ -16,11 +17,18 @@ namespace r1::spectral {
 struct BlockLanczosConfig {
   std::uint32_t want = 5;      // eigenpairs above the deflated trivial one
   std::uint32_t block = 7;     // b: vectors per block, at least `want` (R1-SPEC-021)
-  std::uint32_t basis = 189;   // m: basis columns per cycle, a multiple of b (R1-SPEC-021)
-  std::uint32_t keep = 70;     // Ritz vectors kept at a thick restart, want + b <= keep <= m - 2b (R1-SPEC-026)
+  std::uint32_t basis = 98;    // m: basis columns per cycle, a multiple of b (R1-SPEC-021)
+  std::uint32_t keep = 36;     // Ritz vectors kept at a thick restart, want + b <= keep <= m - 2b (R1-SPEC-026)
   double tolerance = 1e-9;     // residual target (R1-SPEC-028)
   std::uint32_t max_cycles = 1001;
   std::uint64_t seed = 0;      // counter-RNG key of start and fresh vectors (R1-SPEC-030)
+  // The Chebyshev filter (R1-SPEC-080..083): its degree (0 or 1: none), the cycle after which it
+  // starts, the least index of the Ritz value that places its damped interval, and the most
+  // filtered cycles before the solve goes on without it.
+  std::uint32_t filter_degree = 0;
+  std::uint32_t filter_after = 1;
+  std::uint32_t filter_index = 5;
+  std::uint32_t filter_cycles = 64;
 };
 
 // The counter-RNG key of every random vector: the ASCII bytes "r1-spect" (R1-SPEC-030).
@@ -29,6 +37,29 @@ inline constexpr std::uint64_t kSpectralSeed = 0x72312d7370656374u;
 // The fraction bits of the solver's Q32 vectors (R1-SPEC-011): 48, fewer when n is so large that
 // a unit vector's entries (up to 2^(e/2) in value, twice that after L~) would leave int64.
 inline int basis_frac(int e) { return std::min(48, 60 - (e + 1) / 2); }
+
+// The Chebyshev filter of R1-SPEC-080..082: K = -p(L~), p the degree-d Chebyshev polynomial of
+// the first kind on the damped interval [a, 2] mapped to [-1, 1], scaled so that p(al) = 1 (Zhou
+// and Saad's scaled recurrence). On [a, 2] |K| <= band = |K(a)|; on [0, a] K is increasing and
+// below -band. Every scalar is plain IEEE arithmetic in a fixed order (no FMA).
+struct ChebyshevFilter {
+  std::uint32_t degree = 0;
+  double a = 0, al = 0;
+  bool on() const { return degree > 1; }
+  double e() const { return (2 - a) / 2; }
+  double c() const { return (2 + a) / 2; }
+  double s1() const { return e() / (al - c()); }
+  // K(lambda) and dK/dlambda by the scalar recurrence and its derivative.
+  std::pair<double, double> value_slope(double lam) const;
+  double value(double lam) const { return value_slope(lam).first; }
+  // The lambda in [0, a] with K(lambda) = theta (K increasing there): 64 bisection steps.
+  double preimage(double theta) const;
+  // A Ritz pair of K with value theta and residual estimate est_k: the estimate for L~
+  // (R1-SPEC-082): mu = preimage(theta); components near mu shrink by
+  // the slope K'(mu), those on the damped interval by at least |theta| - band over a distance of
+  // at most 2. A Ritz value inside the damped band has none (infinity).
+  double residual_estimate(double theta, double est_k) const;
+};
 
 // The configuration spectral_embedding_* runs with on n particles for `want` pairs (R1-SPEC-021,
 // R1-SPEC-026, R1-SPEC-034), n - 1 > 64 (the dense path below).

@@ -389,6 +389,47 @@ void PanelOps<double>::random(Panel<double>& p, std::uint32_t c, std::uint64_t s
   });
 }
 
+template <>
+void three_term(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta, double gamma,
+                bool parallel) {
+  const std::int64_t ca = coef60(alpha), cb = coef60(beta), cg = coef60(gamma);
+  const int cw = static_cast<int>(std::bit_width(magnitude_bits(ca) | magnitude_bits(cb) | magnitude_bits(cg)));
+  for_row_blocks(len, parallel, [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t k = lo; k < hi; ++k) {
+      const std::int64_t xs = s[k].raw, xy = y[k].raw, xp = gamma == 0 ? 0 : p[k].raw;
+      // Three terms below 2^(cw + xw) each stay below 2^126 when cw + xw <= 124: the plain sum is exact.
+      const std::uint64_t xbits = magnitude_bits(xs) | magnitude_bits(xy) | magnitude_bits(xp);
+      std::int64_t r;
+      if (cw + static_cast<int>(std::bit_width(xbits)) <= 124) {
+        const i128 t = product(ca, xs) + product(cb, xy) + product(cg, xp);
+        const i128 q = fx::detail::rne_shift(t, kCoefBits);
+        if (!fx::detail::fits_i64(q)) fx::detail::throw_overflow("spectral round");
+        r = static_cast<std::int64_t>(q);
+      } else {
+        FastExact acc;
+        acc.add(product(ca, xs));
+        acc.add(product(cb, xy));
+        acc.add(product(cg, xp));
+        r = acc.round_shift(kCoefBits);
+      }
+      p[k] = fx::Q32::from_raw(r);
+    }
+  });
+}
+
+template <>
+void three_term(std::size_t len, const double* s, const double* y, double* p, double alpha, double beta, double gamma,
+                bool parallel) {
+  for_row_blocks(len, parallel, [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t k = lo; k < hi; ++k) {
+      double t = alpha * s[k];
+      t = t + beta * y[k];
+      if (gamma != 0) t = t + gamma * p[k];
+      p[k] = t;
+    }
+  });
+}
+
 template class PanelOps<fx::Q32>;
 template class PanelOps<double>;
 

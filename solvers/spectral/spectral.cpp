@@ -200,6 +200,7 @@ Status check_params(const SpectralParams& p) {
   // basis >= 4 block steps leaves room for the want + b kept Ritz vectors and two blocks
   // (R1-SPEC-021); 200 steps (1000 columns) bounds the memory and the Rayleigh-Ritz cost.
   if (p.basis < 4 || p.basis > 200) return Status::input("spectral: basis must be 4..200 block steps (got " + std::to_string(p.basis) + ")");
+  if (p.filter_degree > 64) return Status::input("spectral: filter degree must be 0..64 (got " + std::to_string(p.filter_degree) + ")");
   if (!(p.tolerance > 0) || !std::isfinite(p.tolerance))
     return Status::input("spectral: tolerance must be a positive number");
   return Status::ok();

@@ -370,4 +370,38 @@ TEST(SpectralClosedFormLarge, LargeSymmetricFamilies) {
 
 #endif
 
+// The filter's scalar K (R1-SPEC-081): -1 at al, the damped interval inside the band
+// 1 / T_d((c - al) / e) (T_d(x) = cosh(d acosh x) for x >= 1), increasing on [0, a], its slope the
+// derivative of the closed form; no L~ estimate inside the band (R1-SPEC-082).
+TEST(SpectralFilter, ScalarRecurrenceIsTheScaledChebyshevPolynomial) {
+  for (const std::uint32_t d : {2u, 5u, 12u, 40u}) {
+    const r1::spectral::ChebyshevFilter f{d, 0.58, 0.5695};
+    const double x_al = (f.c() - f.al) / f.e(), t_al = std::cosh(d * std::acosh(x_al));
+    const auto closed = [&](double lam) {
+      const double x = (f.c() - lam) / f.e();
+      const double t = x >= 1 ? std::cosh(d * std::acosh(x)) : std::cos(d * std::acos(std::max(-1.0, x)));
+      return -t / t_al;
+    };
+    EXPECT_NEAR(f.value(f.al), -1.0, 1e-13) << d;
+    for (double lam = 0; lam <= 2; lam += 0.01)
+      EXPECT_NEAR(f.value(lam), closed(lam), 1e-10 * std::max(1.0, std::fabs(closed(lam)))) << d << " " << lam;
+    const double band = std::fabs(f.value(f.a));
+    EXPECT_NEAR(band, 1 / t_al, 1e-13);
+    for (double lam = f.a; lam <= 2; lam += 0.003) EXPECT_LE(std::fabs(f.value(lam)), band * (1 + 1e-12)) << lam;
+    double prev = f.value(0);
+    for (double lam = 0.001; lam <= f.a; lam += 0.001) {
+      const auto [v, slope] = f.value_slope(lam);
+      EXPECT_GT(v, prev) << lam;
+      EXPECT_GT(slope, 0) << lam;
+      const double h = 1e-6;
+      EXPECT_NEAR(slope, (f.value(lam + h) - f.value(lam - h)) / (2 * h), 1e-5 * std::max(1.0, slope)) << lam;
+      prev = v;
+    }
+    EXPECT_TRUE(std::isinf(f.residual_estimate(-band / 2, 1e-12)));
+    // A Ritz value of an eigenvector at mu with a K-residual est: est / K'(mu) at least.
+    const double mu = 0.57, theta = f.value(mu);
+    EXPECT_GE(f.residual_estimate(theta, 1e-6), 1e-6 / f.value_slope(mu).second * (1 - 1e-9));
+  }
+}
+
 }  // namespace

@@ -9,6 +9,7 @@
 #include <boost/multiprecision/cpp_int.hpp>
 
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "r1/solvers/exact_round.hpp"
@@ -316,6 +317,67 @@ TEST(SpectralKernels, FastAndCheckedPathsAreBothExact) {
         ASSERT_EQ(cpp_int(p.at(i, 2).raw), rne_pow2(k0 * p.at(i, 0).raw + k1 * p.at(i, 1).raw, 60)) << i;
     }
   }
+}
+
+// The filter's recurrence (R1-SPEC-081): three_term is PanelOps::combine with the terms (s, y, p)
+// and a diagonal of coefficients, bit for bit, and the exact sum of cpp_int rounded once; with
+// gamma = 0 p is not read; in parallel the same bits.
+TEST(SpectralKernels, ThreeTermIsTheDiagonalCombination) {
+  rc::check([](std::vector<std::int32_t> raw, double a, double b, double g, bool wide) {
+    RC_PRE(raw.size() >= 3);
+    RC_PRE(std::fabs(a) < 7.9 && std::fabs(b) < 7.9 && std::fabs(g) < 7.9);
+    const std::size_t len = raw.size() - 2;
+    // Wide raws (near 2^62) take the checked path, narrow ones the plain i128 sum.
+    const std::int64_t scale = wide ? (std::int64_t{1} << 31) : 977;
+    std::vector<r1::fx::Q32> sv(len), yv(len), pv(len);
+    for (std::size_t k = 0; k < len; ++k) {
+      sv[k] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(raw[k]) * scale);
+      yv[k] = r1::fx::Q32::from_raw(-static_cast<std::int64_t>(raw[k + 1]) * scale);
+      pv[k] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(raw[k + 2]) * scale);
+    }
+    // The combination on a panel whose rows are (s, y, p).
+    QPanel panel(len, 3);
+    for (std::size_t k = 0; k < len; ++k) {
+      panel.at(k, 0) = sv[k];
+      panel.at(k, 1) = yv[k];
+      panel.at(k, 2) = pv[k];
+    }
+    const QOps ops(len, 0, false);
+    ops.combine(panel, Cols{2}, {}, Cols{0, 1, 2}, std::vector<double>{a, b, g});
+    std::vector<r1::fx::Q32> out = pv;
+    r1::spectral::three_term(len, sv.data(), yv.data(), out.data(), a, b, g, false);
+    const cpp_int ka = r1::spectral::coef60(a), kb = r1::spectral::coef60(b), kg = r1::spectral::coef60(g);
+    for (std::size_t k = 0; k < len; ++k) {
+      RC_ASSERT(out[k] == panel.at(k, 2));
+      RC_ASSERT(cpp_int(out[k].raw) == rne_pow2(ka * sv[k].raw + kb * yv[k].raw + kg * pv[k].raw, 60));
+    }
+    // gamma = 0: p's old values do not matter.
+    std::vector<r1::fx::Q32> junk(len, r1::fx::Q32::from_raw(std::numeric_limits<std::int64_t>::min()));
+    r1::spectral::three_term(len, sv.data(), yv.data(), junk.data(), a, b, 0.0, false);
+    for (std::size_t k = 0; k < len; ++k)
+      RC_ASSERT(cpp_int(junk[k].raw) == rne_pow2(ka * sv[k].raw + kb * yv[k].raw, 60));
+  });
+  // Long enough for the TBB path: the same bits as serially, fp64 too.
+  const std::size_t len = std::size_t{1} << 17;
+  std::vector<r1::fx::Q32> s(len), y(len), p(len);
+  std::vector<double> sd(len), yd(len), pd(len);
+  for (std::size_t k = 0; k < len; ++k) {
+    s[k] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(r1::rng::bits(7, k, 0) >> 12) - (std::int64_t{1} << 51));
+    y[k] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(r1::rng::bits(7, k, 1) >> 12) - (std::int64_t{1} << 51));
+    p[k] = r1::fx::Q32::from_raw(static_cast<std::int64_t>(r1::rng::bits(7, k, 2) >> 12) - (std::int64_t{1} << 51));
+    sd[k] = std::ldexp(static_cast<double>(s[k].raw), -48);
+    yd[k] = std::ldexp(static_cast<double>(y[k].raw), -48);
+    pd[k] = std::ldexp(static_cast<double>(p[k].raw), -48);
+  }
+  std::vector<r1::fx::Q32> serial = p, parallel = p;
+  r1::spectral::three_term(len, s.data(), y.data(), serial.data(), 2.7, -3.4, -0.9, false);
+  r1::spectral::three_term(len, s.data(), y.data(), parallel.data(), 2.7, -3.4, -0.9, true);
+  EXPECT_TRUE(serial == parallel);
+  std::vector<double> dserial = pd, dparallel = pd;
+  r1::spectral::three_term(len, sd.data(), yd.data(), dserial.data(), 2.7, -3.4, -0.9, false);
+  r1::spectral::three_term(len, sd.data(), yd.data(), dparallel.data(), 2.7, -3.4, -0.9, true);
+  EXPECT_TRUE(dserial == dparallel);
+  EXPECT_EQ(dserial[5], (2.7 * sd[5] + -3.4 * yd[5]) + -0.9 * pd[5]);
 }
 
 }  // namespace

@@ -170,6 +170,14 @@ void check_combine(std::size_t rows, std::size_t n, std::size_t cols, Cols outs,
 using BlockDots = std::function<void(std::size_t lo, std::size_t hi, std::vector<FastExact>& acc)>;
 void exact_dots(std::size_t n, bool parallel, int shift, std::span<double> out, const BlockDots& block_sum);
 
+// The Chebyshev filter's recurrence on compact blocks (R1-SPEC-080): for k < len,
+// p[k] <- alpha s[k] + beta y[k] + gamma p[k] (gamma = 0: p is not read), one rounding per entry
+// as PanelOps::combine's with the terms (s, y, p) (Q32: coefficients RNE(c 2^60), |c| < 8, the
+// exact sum rounded once, ties to even; fp64: left to right, no FMA). Bit-identical in parallel.
+template <class Scalar>
+void three_term(std::size_t len, const Scalar* s, const Scalar* y, Scalar* p, double alpha, double beta, double gamma,
+                bool parallel);
+
 // Runs body(lo, hi) over [0, n) in kBlock pieces: serially, or as TBB tasks when asked and the
 // range is long enough. Callers only write disjoint ranges, so the split never shows.
 void for_row_blocks(std::size_t n, bool parallel, const std::function<void(std::size_t, std::size_t)>& body);

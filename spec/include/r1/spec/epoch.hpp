@@ -67,9 +67,10 @@ struct Focus {
 
 struct SpectralParams {
   std::optional<double> rho;      // regularisation (decision 4); unset = auto: 0 if connected, else mean weighted degree
-  std::uint32_t basis = 27;       // block Krylov steps per restart cycle, 7 vectors each (R1-SPEC-021)
+  std::uint32_t basis = 14;       // block Krylov steps per restart cycle, 7 vectors each (R1-SPEC-021)
   double tolerance = 1e-9;        // residual target ||L u - lambda u|| for the wanted pairs
   std::uint32_t max_restarts = 0; // 0 = the solver's documented default
+  std::uint32_t filter_degree = 12; // Chebyshev filter after the first cycle, 0 or 1: none (R1-SPEC-080)
 };
 
 template <class Scalar>
