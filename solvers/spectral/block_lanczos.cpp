@@ -24,6 +24,22 @@ struct CompactBlocks {
   std::vector<Scalar> x, y, z;
 };
 
+// x <- panel columns src .. src + count - 1 as a compact n x count block, and back.
+template <class Scalar>
+void to_compact(const PanelOps<Scalar>& ops, const Panel<Scalar>& p, std::uint32_t src, std::size_t count, Scalar* x) {
+  for_row_blocks(p.rows(), ops.parallel(), [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::size_t c = 0; c < count; ++c) x[i * count + c] = p.at(i, src + c);
+  });
+}
+template <class Scalar>
+void from_compact(const PanelOps<Scalar>& ops, const Scalar* y, std::size_t count, Panel<Scalar>& p, std::uint32_t dst) {
+  for_row_blocks(p.rows(), ops.parallel(), [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::size_t c = 0; c < count; ++c) p.at(i, dst + c) = y[i * count + c];
+  });
+}
+
 // Columns dst.. <- L~ columns src.. (count of each, dst and src runs disjoint). The operator
 // gathers a row of the source block per stored entry: from a compact n x count copy those rows
 // are 8 count bytes apart instead of a whole panel row, which keeps large graphs in cache. The
@@ -34,17 +50,9 @@ void apply_compact(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& o
   const std::size_t n = p.rows();
   buf.x.resize(n * count);
   buf.y.resize(n * count);
-  Scalar* x = buf.x.data();
-  Scalar* y = buf.y.data();
-  for_row_blocks(n, ops.parallel(), [&](std::size_t lo, std::size_t hi) {
-    for (std::size_t i = lo; i < hi; ++i)
-      for (std::size_t c = 0; c < count; ++c) x[i * count + c] = p.at(i, src + c);
-  });
-  op.apply_block(x, count, y, count, count, ops.parallel());
-  for_row_blocks(n, ops.parallel(), [&](std::size_t lo, std::size_t hi) {
-    for (std::size_t i = lo; i < hi; ++i)
-      for (std::size_t c = 0; c < count; ++c) p.at(i, dst + c) = y[i * count + c];
-  });
+  to_compact(ops, p, src, count, buf.x.data());
+  op.apply_block(buf.x.data(), count, buf.y.data(), count, count, ops.parallel());
+  from_compact(ops, buf.y.data(), count, p, dst);
 }
 
 template <class Scalar>
@@ -203,10 +211,7 @@ class Solver {
     Scalar* cur = compact_.x.data();
     Scalar* prev = compact_.z.data();
     Scalar* img = compact_.y.data();
-    for_row_blocks(n, ops_.parallel(), [&](std::size_t lo, std::size_t hi) {
-      for (std::size_t i = lo; i < hi; ++i)
-        for (std::size_t k = 0; k < b; ++k) cur[i * b + k] = p_.at(i, src + k);
-    });
+    to_compact(ops_, p_, src, b, cur);
     auto image = [&](const Scalar* x) {
       op_.apply_block(x, b, img, b, b, ops_.parallel());
       matvecs_ += static_cast<std::uint32_t>(b);
@@ -225,10 +230,7 @@ class Solver {
       std::swap(cur, prev);
       sg = sn;
     }
-    for_row_blocks(n, ops_.parallel(), [&](std::size_t lo, std::size_t hi) {
-      for (std::size_t i = lo; i < hi; ++i)
-        for (std::size_t k = 0; k < b; ++k) p_.at(i, dst + k) = cur[i * b + k];
-    });
+    from_compact(ops_, cur, b, p_, dst);
   }
 
   void orthonormalize_block(Col w0, const std::vector<Col>& list, std::size_t gap_begin, std::size_t gap_end,
