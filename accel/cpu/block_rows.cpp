@@ -82,6 +82,15 @@ __attribute__((target("avx512f,avx512ifma"))) void ifma_row(const std::uint32_t*
   for (std::size_t c = 0; c < kLanes; ++c) s.bits[c] = bl[c];
 }
 
+// Rows lo .. hi - 1 of an n x count block (count < 8) into rows of 8 entries, 64-byte aligned:
+// one masked load and one store a row (lane 7 and the lanes past count are written 0, never read).
+__attribute__((target("avx512f"))) void pad_rows(const fx::Q32* x, std::size_t count, fx::Q32* out, std::size_t lo,
+                                                 std::size_t hi) {
+  const auto mask = static_cast<__mmask8>((1u << count) - 1);
+  for (std::size_t i = lo; i < hi; ++i)
+    _mm512_store_si512(out + i * kLanes, _mm512_maskz_loadu_epi64(mask, x + i * count));
+}
+
 // A whole row for a block of at most 8 columns (the lanes `mask` sets) when its entries fit one
 // lane flush (e - b <= kFlush) and no rank-one term enters: the lane sums of ifma_row, then per
 // lane apply_block's numerator x_i 2^32 - (LO + 2^52 HI - 2^51 msum), formed modulo 2^128 as two
@@ -143,9 +152,7 @@ class IfmaRows final : public spectral::BlockRows {
       padded_.resize(n * kLanes + kLanes);
       fx::Q32* base = padded_.data();
       base += (64 - reinterpret_cast<std::uintptr_t>(base) % 64) % 64 / sizeof(fx::Q32);
-      spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) {
-        for (std::size_t i = lo; i < hi; ++i) std::copy_n(x_in + i * count, count, base + i * kLanes);
-      });
+      spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) { pad_rows(x_in, count, base, lo, hi); });
       x = base;
     }
     spectral::for_row_blocks(n, parallel_, [&](std::size_t lo, std::size_t hi) {

@@ -392,6 +392,56 @@ __attribute__((target("avx512f"))) bool ifma_round8(const std::uint64_t* sums, s
 }
 R1_MASKED_SHIFT_WARNING_ON
 
+// ---- the Chebyshev filter's recurrence on AVX-512 IFMA ------------------------------------------
+//
+// p[k] <- RNE((a s[k] + b y[k] + g p[k]) / 2^60) (spectral::three_term) is a combination of nt = 2
+// or 3 terms with the same coefficients for every entry, so here a lane is an entry and the
+// coefficients are broadcast: the identity of the combinations above, with the per-entry sum of
+// the offset terms in place of the per-row one. The constant nt 2^114 - 2^51 sum c' is the same
+// for every lane.
+struct ThreeTermPlan {
+  std::size_t nt = 0;
+  std::uint64_t c0[3] = {}, c1[3] = {};
+  std::uint64_t k_lo = 0, k_hi = 0;
+};
+
+// Entries k .. k + 7 under `mask`; false, with p untouched, when a term lies beyond the offset
+// range or a result does not fit 64 bits (the caller then takes the portable path, which rounds
+// the first and reports the second).
+R1_MASKED_SHIFT_WARNING_OFF
+__attribute__((target("avx512f,avx512ifma"))) bool ifma_three_term8(const ThreeTermPlan& plan, const std::int64_t* s,
+                                                                       const std::int64_t* y, std::int64_t* p,
+                                                                       __mmask8 mask) {
+  const __m512i off = _mm512_set1_epi64(static_cast<long long>(kOffset));
+  const __m512i x[3] = {_mm512_maskz_loadu_epi64(mask, s), _mm512_maskz_loadu_epi64(mask, y),
+                        plan.nt == 3 ? _mm512_maskz_loadu_epi64(mask, p) : _mm512_setzero_si512()};
+  __m512i l0 = _mm512_setzero_si512(), h0 = l0, l1 = l0, h1 = l0, xsum = l0, bits = l0;
+  for (std::size_t t = 0; t < plan.nt; ++t) {
+    bits = _mm512_or_si512(bits, _mm512_xor_si512(x[t], _mm512_srai_epi64(x[t], 63)));
+    const __m512i xo = _mm512_add_epi64(x[t], off);
+    xsum = _mm512_add_epi64(xsum, xo);
+    const __m512i ca = _mm512_set1_epi64(static_cast<long long>(plan.c0[t]));
+    const __m512i cb = _mm512_set1_epi64(static_cast<long long>(plan.c1[t]));
+    l0 = _mm512_madd52lo_epu64(l0, xo, ca);
+    h0 = _mm512_madd52hi_epu64(h0, xo, ca);
+    l1 = _mm512_madd52lo_epu64(l1, xo, cb);
+    h1 = _mm512_madd52hi_epu64(h1, xo, cb);
+  }
+  if (_mm512_test_epi64_mask(bits, _mm512_set1_epi64(static_cast<long long>(~((std::uint64_t{1} << kOffsetBits) - 1)))) != 0)
+    return false;
+  const __m512i b = _mm512_add_epi64(h0, l1);
+  Wide t{l0, _mm512_slli_epi64(h1, 40)};                                  // L0 + 2^104 H1
+  t = wide_add(t, _mm512_slli_epi64(b, 52), _mm512_srli_epi64(b, 12));  // + 2^52 (H0 + L1)
+  t = wide_add(t, _mm512_set1_epi64(static_cast<long long>(plan.k_lo)), _mm512_set1_epi64(static_cast<long long>(plan.k_hi)));
+  t = wide_sub(t, _mm512_slli_epi64(xsum, 63), _mm512_srli_epi64(xsum, 1));  // - 2^63 sum x'
+  __mmask8 ok = 0;
+  const __m512i r = wide_rne_shift<60>(t, ok);
+  if ((static_cast<__mmask8>(~ok) & mask) != 0) return false;
+  _mm512_mask_storeu_epi64(p, mask, r);
+  return true;
+}
+R1_MASKED_SHIFT_WARNING_ON
+
 // Columns `cols` of rows t0 .. t0 + rows - 1, offset by 2^51,  and split into the high and the low
 // 26 bits, into a column-major tile (two kTile runs per column), adding each column's raw
 // entries to sum[] and its magnitude bits to bits[]. An entry of 2^51 or more wraps here; the bits
@@ -438,6 +488,8 @@ class CpuPanelOps final : public PanelOps<fx::Q32> {
 
   void dots(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::span<double> out) const override;
   void combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, std::span<const double> coef) const override;
+  void three_term(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta,
+                  double gamma) const override;
 
  private:
   void avx2_block_sum(const Panel<fx::Q32>& p, Cols qs, Cols ws, std::size_t lo, std::size_t hi, Scratch& s,
@@ -654,6 +706,32 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
         }
         for (std::size_t o = 0; o < no; ++o) row[outs[o]] = fx::Q32::from_raw(result[o]);
       }
+    }
+  });
+}
+
+void CpuPanelOps::three_term(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta,
+                             double gamma) const {
+  if (level_ != Simd::kAvx512Ifma) return PanelOps<fx::Q32>::three_term(len, s, y, p, alpha, beta, gamma);
+  ThreeTermPlan plan;
+  plan.nt = gamma == 0 ? 2 : 3;  // gamma = 0: p is not read, as in the portable kernel
+  const double coef[3] = {alpha, beta, gamma};
+  u128 csum = 0;
+  for (std::size_t t = 0; t < plan.nt; ++t) {
+    const std::uint64_t cp = static_cast<std::uint64_t>(spectral::coef60(coef[t])) ^ (std::uint64_t{1} << 63);  // c + 2^63
+    plan.c0[t] = cp & ((std::uint64_t{1} << 52) - 1);
+    plan.c1[t] = cp >> 52;
+    csum += cp;
+  }
+  const u128 k = (static_cast<u128>(plan.nt) << 114) - (csum << kOffsetBits);
+  plan.k_lo = static_cast<std::uint64_t>(k);
+  plan.k_hi = static_cast<std::uint64_t>(k >> 64);
+  // Row blocks split at multiples of 8, so groups of 8 entries never straddle two tasks.
+  spectral::for_row_blocks(len, parallel(), [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t k0 = lo; k0 < hi; k0 += 8) {
+      const std::size_t count = std::min<std::size_t>(8, hi - k0);
+      if (!ifma_three_term8(plan, &s[k0].raw, &y[k0].raw, &p[k0].raw, tail_mask(count)))
+        spectral::three_term(count, s + k0, y + k0, p + k0, alpha, beta, gamma, false);
     }
   });
 }

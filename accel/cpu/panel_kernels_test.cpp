@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <limits>
@@ -207,6 +208,50 @@ TEST(CpuPanelKernels, ACombinedEntryBeyond64BitsIsRefusedAtEveryLevel) {
         for (const std::uint32_t c : outs) ASSERT_EQ(g2.at(i, c).raw, w2.at(i, c).raw) << simd_name(s) << " row " << i;
     }
   }
+}
+
+// The Chebyshev filter's recurrence (spectral::three_term): every level, serial and parallel,
+// writes the portable raws, with two terms (gamma = 0: p not read) and three, on entries inside
+// the vector path's range, at its edges and beyond it, with ties and with the extreme
+// coefficients; an entry that cannot fit is refused at every level.
+TEST(CpuPanelKernels, EveryLevelGivesThePortableRecurrenceBitForBit) {
+  for (const std::size_t len : {std::size_t{13}, std::size_t{3 * 4096 + 37}, std::size_t{(1u << 15) + 4096 + 5}}) {
+    const Panel<fx::Q32> src = make_panel(len, {48, 50, 49}, 0x7e11 + len);
+    std::vector<fx::Q32> s = src.copy_column(0), y = src.copy_column(1), p0 = src.copy_column(2);
+    // The offset range's edges (-2^51 in, 2^51 - 1 in, 2^51 out), far beyond it, and odd raws
+    // that make halves (ties) under coefficients of +-1/2.
+    const std::int64_t edge = std::int64_t{1} << 51;
+    const std::vector<std::pair<std::size_t, std::int64_t>> plant = {
+        {0, -edge}, {1, edge - 1}, {2, edge}, {3, -edge - 1}, {4, std::int64_t{1} << 57}, {5, 1}, {6, -3}, {7, 5}};
+    for (const auto& [k, v] : plant)
+      if (k < len) {
+        s[k] = fx::Q32::from_raw(v);
+        y[len - 1 - k] = fx::Q32::from_raw(k % 2 == 0 ? v : 7);
+        p0[(k * 977) % len] = fx::Q32::from_raw(v);
+      }
+    const std::vector<std::array<double, 3>> coefs = {
+        {-1.25, 0.75, 0.0}, {0.5, -0.5, 0.5}, {7.999999999, -7.999999999, 7.5}, {0x1p-60, -0x1p-59, 3.0}, {1.0, 0.0, -1.0}};
+    for (std::size_t ci = 0; ci < coefs.size(); ++ci) {
+      const auto [a, b, g] = coefs[ci];
+      std::vector<fx::Q32> want = p0;
+      spectral::three_term(len, s.data(), y.data(), want.data(), a, b, g, false);
+      for (const Simd lv : levels())
+        for (const bool parallel : {false, true}) {
+          SCOPED_TRACE(std::string(simd_name(lv)) + (parallel ? " parallel" : " serial") + " len=" + std::to_string(len) +
+                       " case " + std::to_string(ci));
+          std::vector<fx::Q32> got = p0;
+          make_panel_kernels(len, 20, parallel, 48, lv)->three_term(len, s.data(), y.data(), got.data(), a, b, g);
+          for (std::size_t k = 0; k < len; ++k) ASSERT_EQ(got[k].raw, want[k].raw) << "entry " << k;
+        }
+    }
+  }
+  // 7.99 (2^61) + 7.99 (2^61) is about 2^65: refused by the portable kernel and at every level.
+  std::vector<fx::Q32> big(16, fx::Q32::from_raw(std::int64_t{1} << 61)), out(16, fx::Q32::from_raw(0));
+  EXPECT_THROW(spectral::three_term(16, big.data(), big.data(), out.data(), 7.99, 7.99, 0.0, false), fx::OverflowError);
+  for (const Simd lv : levels())
+    EXPECT_THROW(make_panel_kernels(16, 4, false, 48, lv)->three_term(16, big.data(), big.data(), out.data(), 7.99, 7.99, 0.0),
+                 fx::OverflowError)
+        << simd_name(lv);
 }
 
 TEST(CpuPanelKernels, TheChosenLevelFollowsTheEnvironmentAndRefusesWhatTheCpuLacks) {

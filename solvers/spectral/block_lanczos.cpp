@@ -219,14 +219,14 @@ class Solver {
     };
     // Y1 = -(s1/e) (L X - c X) (Y0 = -X), into prev's buffer; then cur = Y1, prev = X.
     image(cur);
-    three_term(len, img, cur, prev, -s1 / e, c * s1 / e, 0.0, ops_.parallel());
+    ops_.three_term(len, img, cur, prev, -s1 / e, c * s1 / e, 0.0);
     std::swap(cur, prev);
     double sg = s1;
     for (std::uint32_t i = 2; i <= f.degree; ++i) {
       const double sn = 1 / (tau - sg);
       image(cur);
       // Y_new = 2 sn/e (L Y - c Y) - sg sn Y_prev, over Y_prev.
-      three_term(len, img, cur, prev, 2 * sn / e, -2 * c * sn / e, i == 2 ? sg * sn : -sg * sn, ops_.parallel());
+      ops_.three_term(len, img, cur, prev, 2 * sn / e, -2 * c * sn / e, i == 2 ? sg * sn : -sg * sn);
       std::swap(cur, prev);
       sg = sn;
     }

@@ -430,6 +430,12 @@ void three_term(std::size_t len, const double* s, const double* y, double* p, do
   });
 }
 
+template <class Scalar>
+void PanelOps<Scalar>::three_term(std::size_t len, const Scalar* s, const Scalar* y, Scalar* p, double alpha, double beta,
+                                  double gamma) const {
+  spectral::three_term(len, s, y, p, alpha, beta, gamma, parallel_);
+}
+
 template class PanelOps<fx::Q32>;
 template class PanelOps<double>;
 

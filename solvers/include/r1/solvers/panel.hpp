@@ -128,6 +128,10 @@ class PanelOps {
   // Columns dst[k] <- columns src[k] for every k at once, in one sweep over the rows (a column may
   // be both a source and a destination: each row is read before it is written).
   virtual void move(Panel<Scalar>& p, Cols dst, Cols src) const;
+  // The Chebyshev filter's recurrence on compact blocks: spectral::three_term (below) with this
+  // object's parallel(), the values it defines.
+  virtual void three_term(std::size_t len, const Scalar* s, const Scalar* y, Scalar* p, double alpha, double beta,
+                          double gamma) const;
 
  private:
   std::size_t n_;
