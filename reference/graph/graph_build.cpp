@@ -4,8 +4,10 @@
 #include "r1/solvers/focus.hpp"
 
 #include <boost/multiprecision/cpp_int.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <numeric>
 
 namespace r1 {
@@ -54,6 +56,35 @@ Status compress_rows(std::vector<std::uint64_t>& ptr, std::vector<Entry>& e, con
   return Status::ok();
 }
 
+// Runs body(lo, hi) over the rows [0, n) in blocks of kRowBlock: on TBB workers when `parallel`,
+// else in order. Each block writes only its own rows' entries, so the split never shows.
+constexpr std::size_t kRowBlock = 4096;
+template <class Body>
+void for_rows(std::size_t n, bool parallel, const Body& body) {
+  if (!parallel || n <= kRowBlock) {
+    body(std::size_t{0}, n);
+    return;
+  }
+  tbb::parallel_for(std::size_t{0}, (n + kRowBlock - 1) / kRowBlock, [&](std::size_t b) {
+    body(b * kRowBlock, std::min(n, (b + 1) * kRowBlock));
+  });
+}
+
+// The first error of the blocks run by for_rows; every error of a pass has the same text, so which
+// block found it first does not matter.
+class FirstError {
+ public:
+  void set(const Status& st) {
+    if (st.is_ok() || failed_.exchange(true)) return;
+    status_ = st;
+  }
+  Status get() const { return failed_.load() ? status_ : Status::ok(); }
+
+ private:
+  std::atomic<bool> failed_{false};
+  Status status_ = Status::ok();
+};
+
 }  // namespace
 
 std::int64_t scale_to_q32(u128 value, u128 scale) {
@@ -75,7 +106,7 @@ std::int64_t scale_to_q32(u128 value, u128 scale) {
   return static_cast<std::int64_t>(q);
 }
 
-Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
+Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool parallel) {
   Graph g;
   g.n = static_cast<std::uint32_t>(s.particles.size());
   g.links = s.links.size();
@@ -143,16 +174,27 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
         sym[fill[out[k].col]++] = SymRef{static_cast<std::uint32_t>(i), 1, k};
       }
   }
-  for (std::size_t i = 0; i < n; ++i)
-    std::sort(sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i]), sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i + 1]),
-              [](const SymRef& a, const SymRef& b) { return a.col < b.col; });
-  // Calls emit(col, w, a2) for the merged entries of row i in column order: exact sums.
+  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      std::sort(sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i]), sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i + 1]),
+                [](const SymRef& a, const SymRef& b) { return a.col < b.col; });
+  });
+  // Calls emit(col, w, a2) for the merged entries of row i in column order: exact sums. The A0
+  // entries a row refers to lie anywhere in `out` (a mirrored entry sits in its source's row), so
+  // the entry kAhead references on is fetched ahead: speed only.
+  constexpr std::uint64_t kAhead = 16;
+  const std::uint64_t sym_size = sym.size();
   const auto merged_row = [&](std::size_t i, const auto& emit) -> Status {
     for (std::uint64_t k = sym_ptr[i]; k < sym_ptr[i + 1];) {
       const std::uint32_t col = sym[k].col;
       u128 w = 0;
       i128 a2 = 0;
       for (; k < sym_ptr[i + 1] && sym[k].col == col; ++k) {
+        if (k + kAhead < sym_size) {
+          const Entry* ahead = &out[sym[k + kAhead].out];
+          __builtin_prefetch(ahead);
+          __builtin_prefetch(reinterpret_cast<const char*>(ahead) + sizeof(Entry) - 1);
+        }
         const Entry& e = out[sym[k].out];
         R1_TRY(add_to_pair(w, a2, e.w, sym[k].mirrored != 0 ? -e.a2 : e.a2, s.source));
       }
@@ -160,15 +202,31 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
     }
     return Status::ok();
   };
+  // Pass 1: each row's merged count and the largest weight, per block of rows (the maximum is
+  // the same in any grouping).
   std::vector<std::uint64_t> row_ptr(n + 1, 0);
-  g.weight_scale = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    R1_TRY(merged_row(i, [&](std::uint32_t, u128 w, i128) {
-      ++row_ptr[i + 1];
-      g.weight_scale = std::max(g.weight_scale, w);
-    }));
-    row_ptr[i + 1] += row_ptr[i];
+  std::vector<u128> block_max((n + kRowBlock - 1) / kRowBlock, 0);
+  {
+    FirstError error;
+    for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+      u128 m = 0;
+      for (std::size_t i = lo; i < hi; ++i) {
+        const Status st = merged_row(i, [&](std::uint32_t, u128 w, i128) {
+          ++row_ptr[i + 1];
+          m = std::max(m, w);
+        });
+        if (!st.is_ok()) {
+          error.set(st);
+          return;
+        }
+      }
+      block_max[lo / kRowBlock] = std::max(block_max[lo / kRowBlock], m);
+    });
+    R1_TRY(error.get());
   }
+  std::partial_sum(row_ptr.begin(), row_ptr.end(), row_ptr.begin());
+  g.weight_scale = 0;
+  for (const u128 m : block_max) g.weight_scale = std::max(g.weight_scale, m);
   if (g.weight_scale == 0) return Status::input(s.source + ": every link has weight zero");
 
   // Normalise to Q32 (R1-IN-052): weights round to at least one unit so links never vanish.
@@ -180,28 +238,35 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress) {
   g.col.resize(row_ptr[n]);
   g.w.resize(row_ptr[n]);
   g.a2.resize(row_ptr[n]);
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint64_t k = row_ptr[i];
-    R1_TRY(merged_row(i, [&](std::uint32_t col, u128 w, i128 a2) {
-      g.col[k] = col;
-      g.w[k] = to_q32(w);
-      g.a2[k] = to_q32_signed(a2);
-      ++k;
-    }));
-  }
+  // Pass 2: the entries, each row into its own range (its sums were checked by pass 1).
+  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i) {
+      std::uint64_t k = row_ptr[i];
+      (void)merged_row(i, [&](std::uint32_t col, u128 w, i128 a2) {
+        g.col[k] = col;
+        g.w[k] = to_q32(w);
+        g.a2[k] = to_q32_signed(a2);
+        ++k;
+      });
+    }
+  });
   g.row_ptr = std::move(row_ptr);
   std::vector<SymRef>().swap(sym);
   g.out_ptr = std::move(out_ptr);
   g.out_col.resize(out.size());
   g.out_w.resize(out.size());
-  for (std::size_t k = 0; k < out.size(); ++k) {
-    g.out_col[k] = out[k].col;
-    g.out_w[k] = to_q32(out[k].w);
-  }
+  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+    for (std::uint64_t k = g.out_ptr[lo]; k < g.out_ptr[hi]; ++k) {
+      g.out_col[k] = out[k].col;
+      g.out_w[k] = to_q32(out[k].w);
+    }
+  });
 
   g.degree.assign(n, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) g.degree[i] += static_cast<std::uint64_t>(g.w[k]);
+  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) g.degree[i] += static_cast<std::uint64_t>(g.w[k]);
+  });
 
   summarise_for_focus(g);  // R1-IN-059
 

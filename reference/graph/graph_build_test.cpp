@@ -6,6 +6,10 @@
 #include <rapidcheck/gtest.h>
 
 #include <boost/multiprecision/cpp_int.hpp>
+#include <tbb/task_arena.h>
+
+#include <map>
+#include <random>
 
 #include "r1/reference/snapshot_builder.hpp"
 
@@ -189,6 +193,137 @@ RC_GTEST_PROP(GraphBuild, InvariantsOnRandomSnapshots, ()) {
   RC_ASSERT(r2->w == g.w);
   RC_ASSERT(r2->a2 == g.a2);
   RC_ASSERT(r2->out_w == g.out_w);
+}
+
+// RNE(v 2^32 / scale) in cpp_int, v >= 0: the normalisation of R1-IN-052 computed apart from
+// scale_to_q32.
+std::int64_t rne_q32(const boost::multiprecision::cpp_int& v, const boost::multiprecision::cpp_int& scale) {
+  using boost::multiprecision::cpp_int;
+  const cpp_int num = v << 32;
+  cpp_int q = num / scale;
+  const cpp_int r = num - q * scale;
+  if (r * 2 > scale || (r * 2 == scale && (q & 1) != 0)) ++q;
+  return static_cast<std::int64_t>(q);
+}
+
+// A graph of many row blocks, built on four workers and on one, against the exact sums of an
+// ordered map: parallel links, both directions, two tokens, every valence, a hub.
+TEST(GraphBuild, ParallelRowsGiveTheSerialGraphAndTheExactSums) {
+  using boost::multiprecision::cpp_int;
+  constexpr int n = 20000, m = 150000;
+  std::mt19937_64 rng(7);
+  r1::SnapshotBuilder b("blocks");
+  b.snapshot().config = r1::text_input_config();
+  b.snapshot().config.tokens[1] = {"t1", 250};
+  std::vector<std::uint32_t> ids(n);
+  for (int i = 0; i < n; ++i) ids[static_cast<std::size_t>(i)] = b.particle_by_name("p" + std::to_string(i));
+  // (from, to) -> exact A0 weight and signed A2 contribution.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<cpp_int, cpp_int>> a0;
+  for (int k = 0; k < m; ++k) {
+    r1::Link l;
+    l.height = 1;
+    l.amount = (static_cast<u128>(rng() >> 20) << 20) + (rng() & 0xFFFFF) + 1;
+    l.token = static_cast<std::uint32_t>(rng() % 2);
+    l.valence = static_cast<std::int8_t>(static_cast<int>(rng() % 3) - 1);
+    const auto from = static_cast<std::uint32_t>(k % 7 == 0 ? 0 : rng() % n);  // particle 0 is a hub
+    auto to = static_cast<std::uint32_t>(rng() % n);
+    if (k % 11 == 0) to = (from + 1) % n;  // repeats: parallel links and reverse pairs
+    l.from = ids[from];
+    l.to = ids[to];
+    b.add_link(l);
+    if (from == to) continue;
+    const cpp_int w = cpp_int(l.amount) * b.snapshot().config.tokens.at(l.token).weight_permille;
+    auto& e = a0[{l.from, l.to}];
+    e.first += w;
+    e.second += l.valence > 0 ? w : l.valence < 0 ? cpp_int(-w) : cpp_int(0);
+  }
+  auto snap = b.finish();
+  ASSERT_TRUE(snap.is_ok());
+  auto serial = r1::build_graph(*snap, {}, false);
+  std::optional<r1::Result<r1::Graph>> parallel;
+  tbb::task_arena four(4);
+  four.execute([&] { parallel.emplace(r1::build_graph(*snap, {}, true)); });
+  ASSERT_TRUE(serial.is_ok()) << serial.status().message();
+  ASSERT_TRUE(parallel->is_ok()) << parallel->status().message();
+  const r1::Graph& g = *serial;
+  const r1::Graph& p = **parallel;
+  EXPECT_EQ(p.row_ptr, g.row_ptr);
+  EXPECT_EQ(p.col, g.col);
+  EXPECT_EQ(p.w, g.w);
+  EXPECT_EQ(p.a2, g.a2);
+  EXPECT_EQ(p.out_ptr, g.out_ptr);
+  EXPECT_EQ(p.out_col, g.out_col);
+  EXPECT_EQ(p.out_w, g.out_w);
+  EXPECT_EQ(p.degree, g.degree);
+  EXPECT_EQ(p.component, g.component);
+  EXPECT_TRUE(p.weight_scale == g.weight_scale);
+
+  // A_sym = A0 + A0^T, A2 antisymmetric, normalised by the largest A_sym entry.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<cpp_int, cpp_int>> sym;
+  for (const auto& [key, e] : a0) {
+    auto& f = sym[key];
+    f.first += e.first;
+    f.second += e.second;
+    auto& r = sym[{key.second, key.first}];
+    r.first += e.first;
+    r.second -= e.second;
+  }
+  cpp_int scale = 0;
+  for (const auto& [key, e] : sym) scale = std::max(scale, e.first);
+  EXPECT_TRUE(cpp_int(g.weight_scale) == scale);
+  ASSERT_EQ(g.nnz(), sym.size());
+  auto it = sym.begin();
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k, ++it) {
+      ASSERT_EQ(it->first, std::make_pair(i, g.col[k]));
+      ASSERT_EQ(g.w[k], std::max<std::int64_t>(1, rne_q32(it->second.first, scale))) << i << ' ' << g.col[k];
+      const cpp_int& a2 = it->second.second;
+      const std::int64_t mag = a2 == 0 ? 0 : rne_q32(a2 < 0 ? cpp_int(-a2) : a2, scale);
+      ASSERT_EQ(g.a2[k], a2 < 0 ? -mag : mag) << i << ' ' << g.col[k];
+    }
+  auto ot = a0.begin();
+  for (std::uint32_t i = 0; i < g.n; ++i)
+    for (std::uint64_t k = g.out_ptr[i]; k < g.out_ptr[i + 1]; ++k, ++ot) {
+      ASSERT_EQ(ot->first, std::make_pair(i, g.out_col[k]));
+      ASSERT_EQ(g.out_w[k], std::max<std::int64_t>(1, rne_q32(ot->second.first, scale)));
+    }
+  EXPECT_TRUE(ot == a0.end());
+}
+
+// An overflowing pair deep in a graph of many row blocks is the same error on four workers.
+TEST(GraphBuild, ParallelRowsReportTheOverflow) {
+  r1::SnapshotBuilder b("overflow");
+  b.snapshot().config = r1::text_input_config();
+  constexpr int n = 20000;
+  std::vector<std::uint32_t> ids(n);
+  for (int i = 0; i < n; ++i) ids[static_cast<std::size_t>(i)] = b.particle_by_name("p" + std::to_string(i));
+  for (int i = 0; i + 1 < n; ++i) {
+    r1::Link l;
+    l.height = 1;
+    l.amount = 1;
+    l.from = ids[static_cast<std::size_t>(i)];
+    l.to = ids[static_cast<std::size_t>(i + 1)];
+    b.add_link(l);
+  }
+  // Each direction alone stays below 2^127 (after the token's per-mille weight); their sum does not.
+  for (const bool reverse : {false, true}) {
+    r1::Link l;
+    l.height = 1;
+    l.amount = (u128{1} << 126) / 1000 + 1;
+    l.from = ids[reverse ? 15001 : 15000];
+    l.to = ids[reverse ? 15000 : 15001];
+    b.add_link(l);
+  }
+  auto snap = b.finish();
+  ASSERT_TRUE(snap.is_ok());
+  std::optional<r1::Result<r1::Graph>> r;
+  tbb::task_arena four(4);
+  four.execute([&] { r.emplace(r1::build_graph(*snap, {}, true)); });
+  ASSERT_FALSE(r->is_ok());
+  EXPECT_EQ(r->status().message(), "overflow: summed link weight of one particle pair reaches 2^127");
+  auto s1 = r1::build_graph(*snap, {}, false);
+  ASSERT_FALSE(s1.is_ok());
+  EXPECT_EQ(s1.status().message(), r->status().message());
 }
 
 }  // namespace

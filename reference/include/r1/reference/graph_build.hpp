@@ -9,8 +9,9 @@
 namespace r1 {
 
 // Fails (bad input) when the snapshot has no link left after dropping self-loops, or when an
-// exact weight sum overflows 128 bits.
-Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress = {});
+// exact weight sum overflows 128 bits. `parallel` runs the per-row passes (sorts, exact merges,
+// Q32 values, degrees) on TBB workers: the same graph, bit for bit.
+Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress = {}, bool parallel = true);
 
 // round(value * 2^32 / scale), ties to even, for 0 <= value <= scale, scale > 0: the Q32 weight
 // normalisation of R1-IN-052. Exact for every u128 input.
