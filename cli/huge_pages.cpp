@@ -28,9 +28,10 @@
 namespace {
 
 constexpr std::size_t kHugePage = std::size_t{2} << 20;
-// Blocks from this size up: glibc serves them by mmap (fresh, untouched pages), and each spans
-// several huge pages.
-constexpr std::size_t kAdviseFrom = std::size_t{2} << 20;
+// Blocks from one huge page up (a smaller block holds no whole huge page). glibc serves most of
+// them by mmap, untouched; one it takes from its heap gets the advice for its pages not yet
+// touched.
+constexpr std::size_t kAdviseFrom = kHugePage;
 
 void* allocate(std::size_t n) {
   void* p = std::malloc(n == 0 ? 1 : n);
