@@ -2,9 +2,9 @@
 // (decision 3, R1-IN-050..058).
 #include "r1/reference/graph_build.hpp"
 #include "r1/solvers/focus.hpp"
+#include "r1/solvers/panel.hpp"
 
 #include <boost/multiprecision/cpp_int.hpp>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -56,22 +56,8 @@ Status compress_rows(std::vector<std::uint64_t>& ptr, std::vector<Entry>& e, con
   return Status::ok();
 }
 
-// Runs body(lo, hi) over the rows [0, n) in blocks of kRowBlock: on TBB workers when `parallel`,
-// else in order. Each block writes only its own rows' entries, so the split never shows.
-constexpr std::size_t kRowBlock = 4096;
-template <class Body>
-void for_rows(std::size_t n, bool parallel, const Body& body) {
-  if (!parallel || n <= kRowBlock) {
-    body(std::size_t{0}, n);
-    return;
-  }
-  tbb::parallel_for(std::size_t{0}, (n + kRowBlock - 1) / kRowBlock, [&](std::size_t b) {
-    body(b * kRowBlock, std::min(n, (b + 1) * kRowBlock));
-  });
-}
-
-// The first error of the blocks run by for_rows; every error of a pass has the same text, so which
-// block found it first does not matter.
+// The first error of the row blocks (spectral::for_row_blocks); every error of a pass has the same
+// text, so which block found it first does not matter.
 class FirstError {
  public:
   void set(const Status& st) {
@@ -174,7 +160,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
         sym[fill[out[k].col]++] = SymRef{static_cast<std::uint32_t>(i), 1, k};
       }
   }
-  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(n, parallel, [&](std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i)
       std::sort(sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i]), sym.begin() + static_cast<std::ptrdiff_t>(sym_ptr[i + 1]),
                 [](const SymRef& a, const SymRef& b) { return a.col < b.col; });
@@ -205,10 +191,10 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
   // Pass 1: each row's merged count and the largest weight, per block of rows (the maximum is
   // the same in any grouping).
   std::vector<std::uint64_t> row_ptr(n + 1, 0);
-  std::vector<u128> block_max((n + kRowBlock - 1) / kRowBlock, 0);
+  std::vector<u128> block_max((n + spectral::kBlock - 1) / spectral::kBlock, 0);
   {
     FirstError error;
-    for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+    spectral::for_row_blocks(n, parallel, [&](std::size_t lo, std::size_t hi) {
       u128 m = 0;
       for (std::size_t i = lo; i < hi; ++i) {
         const Status st = merged_row(i, [&](std::uint32_t, u128 w, i128) {
@@ -220,7 +206,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
           return;
         }
       }
-      block_max[lo / kRowBlock] = std::max(block_max[lo / kRowBlock], m);
+      block_max[lo / spectral::kBlock] = std::max(block_max[lo / spectral::kBlock], m);
     });
     R1_TRY(error.get());
   }
@@ -239,7 +225,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
   g.w.resize(row_ptr[n]);
   g.a2.resize(row_ptr[n]);
   // Pass 2: the entries, each row into its own range (its sums were checked by pass 1).
-  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(n, parallel, [&](std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i) {
       std::uint64_t k = row_ptr[i];
       (void)merged_row(i, [&](std::uint32_t col, u128 w, i128 a2) {
@@ -255,7 +241,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
   g.out_ptr = std::move(out_ptr);
   g.out_col.resize(out.size());
   g.out_w.resize(out.size());
-  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(n, parallel, [&](std::size_t lo, std::size_t hi) {
     for (std::uint64_t k = g.out_ptr[lo]; k < g.out_ptr[hi]; ++k) {
       g.out_col[k] = out[k].col;
       g.out_w[k] = to_q32(out[k].w);
@@ -263,7 +249,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
   });
 
   g.degree.assign(n, 0);
-  for_rows(n, parallel, [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(n, parallel, [&](std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i)
       for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) g.degree[i] += static_cast<std::uint64_t>(g.w[k]);
   });

@@ -210,7 +210,7 @@ std::int64_t rne_q32(const boost::multiprecision::cpp_int& v, const boost::multi
 // ordered map: parallel links, both directions, two tokens, every valence, a hub.
 TEST(GraphBuild, ParallelRowsGiveTheSerialGraphAndTheExactSums) {
   using boost::multiprecision::cpp_int;
-  constexpr int n = 20000, m = 150000;
+  constexpr int n = 40000, m = 200000;  // past spectral::kParallelMin rows: the blocks run on workers
   std::mt19937_64 rng(7);
   r1::SnapshotBuilder b("blocks");
   b.snapshot().config = r1::text_input_config();
@@ -225,7 +225,9 @@ TEST(GraphBuild, ParallelRowsGiveTheSerialGraphAndTheExactSums) {
     l.amount = (static_cast<u128>(rng() >> 20) << 20) + (rng() & 0xFFFFF) + 1;
     l.token = static_cast<std::uint32_t>(rng() % 2);
     l.valence = static_cast<std::int8_t>(static_cast<int>(rng() % 3) - 1);
-    const auto from = static_cast<std::uint32_t>(k % 7 == 0 ? 0 : rng() % n);  // particle 0 is a hub
+    // Particle 35000 is a hub, and its pair with 35001 (every 77th link) is the heaviest: the scale
+    // comes from a late row block.
+    const auto from = static_cast<std::uint32_t>(k % 7 == 0 ? 35000 : rng() % n);
     auto to = static_cast<std::uint32_t>(rng() % n);
     if (k % 11 == 0) to = (from + 1) % n;  // repeats: parallel links and reverse pairs
     l.from = ids[from];
@@ -294,7 +296,7 @@ TEST(GraphBuild, ParallelRowsGiveTheSerialGraphAndTheExactSums) {
 TEST(GraphBuild, ParallelRowsReportTheOverflow) {
   r1::SnapshotBuilder b("overflow");
   b.snapshot().config = r1::text_input_config();
-  constexpr int n = 20000;
+  constexpr int n = 40000;
   std::vector<std::uint32_t> ids(n);
   for (int i = 0; i < n; ++i) ids[static_cast<std::size_t>(i)] = b.particle_by_name("p" + std::to_string(i));
   for (int i = 0; i + 1 < n; ++i) {
@@ -310,8 +312,8 @@ TEST(GraphBuild, ParallelRowsReportTheOverflow) {
     r1::Link l;
     l.height = 1;
     l.amount = (u128{1} << 126) / 1000 + 1;
-    l.from = ids[reverse ? 15001 : 15000];
-    l.to = ids[reverse ? 15000 : 15001];
+    l.from = ids[reverse ? 35001 : 35000];
+    l.to = ids[reverse ? 35000 : 35001];
     b.add_link(l);
   }
   auto snap = b.finish();
