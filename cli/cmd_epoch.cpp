@@ -163,13 +163,15 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   ProgressLine progress;
   const auto t0 = std::chrono::steady_clock::now();
   // The earlier epoch (R1-INC-001) is read and checked while the snapshot is read: the snapshot's
-  // parse runs on one thread, and PREV's digests fill the other cores. Its files' tree leaves
-  // let the new epoch's digests hash only what changed (R1-EPO-016). Errors come in the order of
+  // parse runs on one thread, and PREV's check fills the other cores (through its chunk table at
+  // SHA-256 speed, R1-EPO-018). Its files' tree leaves and chunk SHA-256s let the new epoch's
+  // digests hash only what changed (R1-EPO-016). Errors come in the order of
   // the reads one after the other (the snapshot's first); an early return waits for the task.
   EpochLeaves prev_leaves;
   std::future<Result<Epoch>> prev_read;
   if (!c.from.empty())
-    prev_read = std::async(std::launch::async, [&c, &prev_leaves] { return read_epoch(c.from, &prev_leaves); });
+    prev_read = std::async(std::launch::async,
+                           [&c, &prev_leaves] { return read_epoch(c.from, &prev_leaves, DigestCheck::kChunkTable); });
   R1_ASSIGN(const ReadOptions ro, c.input.read_options(progress.sink()));
   R1_ASSIGN(Snapshot s, read_snapshot(c.snapshot, ro));
   // T0 content (R1-EPO-030..033): read before the stages, so a bad side file costs no solve.

@@ -81,6 +81,20 @@ Sha256 sha256(std::span<const std::uint8_t> bytes) {
   return out;
 }
 
+std::vector<std::uint64_t> leaves_by_sha(std::span<const Sha256> sha, std::span<const Sha256> previous_sha,
+                                         std::span<const hemera::Digest> previous_leaves, std::span<hemera::Digest> leaves) {
+  const bool reuse = sha.size() > 1 && previous_leaves.size() > 1 && previous_sha.size() == previous_leaves.size();
+  std::vector<std::uint64_t> todo;
+  for (std::size_t i = 0; i < sha.size(); ++i) {
+    if (reuse && i < previous_sha.size() && sha[i] == previous_sha[i]) {
+      leaves[i] = previous_leaves[i];
+    } else {
+      todo.push_back(i);
+    }
+  }
+  return todo;
+}
+
 hemera::Digest snapshot_digest(const Snapshot& s, RecordChunks& chunks, const RecordChunks* previous) {
   const std::uint64_t total = stream_bytes(s);
   const std::size_t n = static_cast<std::size_t>(hemera::leaf_count(total));
@@ -93,22 +107,14 @@ hemera::Digest snapshot_digest(const Snapshot& s, RecordChunks& chunks, const Re
   std::vector<std::uint64_t> todo;
   if (reuse) {
     // Every chunk's SHA-256 (encoded twice where it changed: here and for its leaf).
-    std::vector<char> same(n, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
       std::array<std::uint8_t, hemera::CHUNK_BYTES> buf;
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
         const std::size_t len = record_chunk(s, i, buf);
         chunks.sha[i] = sha256(std::span<const std::uint8_t>(buf.data(), len));
-        same[i] = i < previous->sha.size() && chunks.sha[i] == previous->sha[i];
       }
     });
-    for (std::size_t i = 0; i < n; ++i) {
-      if (same[i]) {
-        chunks.leaves[i] = previous->leaves[i];
-      } else {
-        todo.push_back(i);
-      }
-    }
+    todo = leaves_by_sha(chunks.sha, previous->sha, previous->leaves, chunks.leaves);
     hemera::chunk_leaves(total, todo, [&](std::uint64_t i, std::span<std::uint8_t> out) { return record_chunk(s, i, out); },
                          chunks.leaves);
   } else {

@@ -59,7 +59,7 @@ TEST(CliEpoch, TwoRunsWithoutTimingsAreByteIdentical) {
     const auto other = d / "b" / e.path().filename();
     EXPECT_EQ(r1::test::read_file(e.path()), r1::test::read_file(other)) << e.path().filename();
   }
-  EXPECT_EQ(files, 22u);  // R1-EPO-011: 21 files (betweenness.f64 with role shapes, heat.q32, image.i128, records.chunks) + manifest.json
+  EXPECT_EQ(files, 23u);  // R1-EPO-011: 22 files (betweenness.f64 with role shapes, heat.q32, image.i128, records.chunks, files.chunks) + manifest.json
   const auto m = nlohmann::json::parse(r1::test::read_file(d / "a/manifest.json"));
   EXPECT_EQ(m["eigenvalues"].size(), 6u);
   EXPECT_EQ(m["residuals"].size(), 6u);

@@ -44,6 +44,9 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
   EXPECT_EQ(u.at("hops"), 3);
   EXPECT_LE(u.at("certificate").get<double>(), u.at("eps_x").get<double>());
   EXPECT_EQ(u.at("vector_bound").at(4), nullptr);
+  // The hierarchy at PREV's scale (R1-INC-035); the manifest's radii say so.
+  EXPECT_EQ(u.at("hierarchy_radius"), "kept");
+  EXPECT_EQ(manifest(c.d / "inc").at("hierarchy").at("radii"), manifest(c.prev).at("hierarchy").at("radii"));
   // The digest from PREV's record chunks (R1-EPO-017) is the one `r1 info` finds by hashing every
   // record, and the chunks are those of an epoch of NEXT by itself.
   const auto info = run_cli({"info", c.next.string()});
@@ -75,6 +78,7 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
                 .exit_code,
             0);
   EXPECT_EQ(manifest(c.d / "full").at("update").at("reason"), "forced (--full)");
+  EXPECT_EQ(manifest(c.d / "full").at("update").at("hierarchy_radius"), "searched");
   EXPECT_EQ(r1::test::read_file(c.d / "full/records.chunks"), r1::test::read_file(c.d / "alone/records.chunks"));
   EXPECT_FALSE(manifest(c.d / "full").at("alignment").at("genesis").get<bool>());
 }
@@ -142,12 +146,19 @@ TEST(CliIncremental, BadInputIsOneLineExitTwoAndNothingWritten) {
   fs::copy(c.prev, c.d / "cut.epoch");
   const std::string pos = r1::test::read_file(c.d / "cut.epoch" / "positions.q32");
   r1::test::write_file(c.d / "cut.epoch" / "positions.q32", pos.substr(0, pos.size() / 2));
+  // An epoch with one byte changed: PREV is checked through its chunk table (R1-EPO-018).
+  fs::copy(c.prev, c.d / "flipped.epoch");
+  std::string flipped = pos;
+  flipped[flipped.size() - 1] ^= 1;
+  r1::test::write_file(c.d / "flipped.epoch" / "positions.q32", flipped);
   // An epoch of another chain.
   ASSERT_EQ(run_cli({"gen", "ring", "--n", "50", "-o", (c.d / "ring.tsv").string()}).exit_code, 0);
   ASSERT_EQ(run_cli({"epoch", (c.d / "ring.tsv").string(), "-q", "-o", (c.d / "ring.epoch").string()}).exit_code, 0);
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"--from", (c.d / "none").string()}, "none: not an epoch directory"},
       {{"--from", (c.d / "cut.epoch").string()}, "positions.q32"},
+      {{"--from", (c.d / "flipped.epoch").string()}, "positions.q32: chunk " + std::to_string((pos.size() - 1) / 4096) +
+                                                          " differs from its SHA-256 in files.chunks"},
       {{"--from", (c.d / "ring.epoch").string()}, "not an epoch of this snapshot's chain"},
       {{"--hops", "3"}, "need --from"},
       {{"--from", c.prev.string(), "--anchor", (c.prev / "anchor.bin").string()}, "leave out --anchor"},

@@ -11,10 +11,13 @@
 #include <cstring>
 #include <limits>
 #include <fstream>
+#include <future>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "../snapshot/text_util.hpp"
+#include "file_chunks.hpp"
 #include "r1/format/arrays.hpp"
 #include "r1/reference/atomic_dir.hpp"
 #include "r1/reference/frame.hpp"
@@ -30,9 +33,10 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "r1-epoch";
-constexpr int kVersion = 5;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64;
-                             // 4: image.i128 with residual_sums, heat.q32; 5: records.chunks
-constexpr int kOldestVersion = 4;  // read as well: a version 4 epoch is one without records.chunks
+constexpr int kVersion = 6;  // 2: edges.bin; hierarchy.bin read back and checked; 3: outrows.u64, betweenness.f64;
+                             // 4: image.i128 with residual_sums, heat.q32; 5: records.chunks; 6: files.chunks
+constexpr int kOldestVersion = 4;  // read as well: version 4 has no records.chunks, 4 and 5 no files.chunks
+constexpr const char* kChunkTable = "files.chunks";  // R1-EPO-018
 constexpr std::size_t kChunkRowBytes = 64;  // records.chunks: SHA-256, then the Hemera leaf
 
 // The chunks of a snapshot's record stream of `links` records (R1-IN-040, records.chunks).
@@ -51,19 +55,24 @@ std::span<const std::uint8_t> as_bytes(std::string_view s) {
 
 std::string file_digest(std::string_view bytes) { return hex(hemera::root_hash(as_bytes(bytes))); }
 
-// The digest of the epoch file `name` (R1-EPO-016): against the epoch before, when it lists the
-// file and it still opens, only the chunks that differ from it are hashed; the result is
-// file_digest(bytes) either way.
-std::string file_digest(const std::string& name, std::string_view bytes, const EpochLeaves* previous) {
+// The chunks of the epoch file `name`, their SHA-256s and leaves (R1-EPO-016, R1-EPO-018): against
+// the epoch before, when it lists the file, only the chunks that differ from it are hashed with
+// Hemera; which differ is told by its chunk table's SHA-256s where PREV was read with them, else
+// by comparing with its file as it is on disk then (when it still opens). The leaves are
+// tree_leaves(bytes) either way.
+epoch_chunks::FileChunks file_chunks(const std::string& name, std::string_view bytes, const EpochLeaves* previous) {
   if (previous != nullptr) {
     const auto it = previous->leaves.find(name);
     if (it != previous->leaves.end()) {
-      auto before = InputFile::open((previous->dir / name).string());
-      if (before.is_ok())
-        return hex(hemera::root_of_leaves(hemera::tree_leaves_reusing(as_bytes(bytes), (*before)->bytes(), it->second)));
+      const auto sha = previous->sha.find(name);
+      if (sha != previous->sha.end()) return epoch_chunks::chunk_file(as_bytes(bytes), sha->second, it->second);
+      auto file = InputFile::open((previous->dir / name).string());
+      if (file.is_ok())
+        return {epoch_chunks::chunk_sha(as_bytes(bytes)),
+                hemera::tree_leaves_reusing(as_bytes(bytes), (*file)->bytes(), it->second)};
     }
   }
-  return file_digest(bytes);
+  return epoch_chunks::chunk_file(as_bytes(bytes));
 }
 
 const char* role_name(Role r) {
@@ -155,6 +164,7 @@ json update_json(const UpdateInfo& u) {
           {"focus", u.focus_local ? "local" : "full"},
           {"certified", u.certified},
           {"betweenness", u.betweenness_carried ? "carried" : "computed"},
+          {"hierarchy_radius", u.hierarchy_radius_kept ? "kept" : "searched"},
           {"delta_norm", u.delta_norm},
           {"delta_norm_since_full", u.delta_norm_since_full},
           {"full_eigenvalues", u.full_eigenvalues},
@@ -179,6 +189,8 @@ UpdateInfo update_from(const json& j) {
   u.focus_local = j.at("focus").get<std::string>() == "local";
   u.certified = j.at("certified").get<bool>();
   u.betweenness_carried = j.at("betweenness").get<std::string>() == "carried";
+  // Absent in epochs made before R1-INC-035 kept the radius: they searched it.
+  u.hierarchy_radius_kept = j.value("hierarchy_radius", std::string("searched")) == "kept";
   u.delta_norm = j.at("delta_norm").get<double>();
   u.delta_norm_since_full = j.at("delta_norm_since_full").get<double>();
   u.full_eigenvalues = j.at("full_eigenvalues").get<std::array<double, 6>>();
@@ -271,8 +283,11 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
   return f;
 }
 
+namespace {
+
+// The manifest of an epoch whose files (the chunk table last) have `digests` (R1-EPO-012).
 std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::string, std::string>>& files,
-                           const EpochWriteOptions& o) {
+                           const std::vector<std::string>& digests, const EpochWriteOptions& o) {
   json m;
   m["format"] = kFormat;
   m["version"] = kVersion;
@@ -334,13 +349,18 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
   }
   m["hierarchy"] = {{"tau0", e.hierarchy.tau0}, {"radii", radii}, {"clusters_per_level", counts}};
   json fj = json::object();
-  for (const auto& [name, bytes] : files) {
-    const std::string digest = file_digest(name, bytes, o.previous);
-    fj[name] = {{"bytes", bytes.size()}, {"hemera", digest}};
-    if (name == "hierarchy.bin") m["topology_digest"] = digest;
-    if (name == "anchor.bin") m["anchor_digest"] = digest;
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    const std::string& name = files[k].first;
+    fj[name] = {{"bytes", files[k].second.size()}, {"hemera", digests[k]}};
+    if (name == "hierarchy.bin") m["topology_digest"] = digests[k];
+    if (name == "anchor.bin") m["anchor_digest"] = digests[k];
   }
   m["files"] = fj;
+  // The files the chunk table covers, in the order of its rows (R1-EPO-018).
+  json chunked = json::array();
+  for (const auto& [name, bytes] : files)
+    if (name != kChunkTable) chunked.push_back({{"file", name}, {"bytes", bytes.size()}});
+  m["chunked"] = chunked;
   if (e.update) m["update"] = update_json(*e.update);
   if (o.timings) {
     json tj = json::object();
@@ -350,17 +370,47 @@ std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::stri
   return m.dump(2) + "\n";
 }
 
+// Each file's digest, and the chunk table's bytes (R1-EPO-018).
+std::vector<std::string> digest_files(const std::vector<std::pair<std::string, std::string>>& files,
+                                      const EpochLeaves* previous, std::string& table) {
+  std::vector<std::string> digests;
+  std::vector<epoch_chunks::FileChunks> chunks;
+  chunks.reserve(files.size());
+  for (const auto& [name, bytes] : files) {
+    chunks.push_back(file_chunks(name, bytes, previous));
+    digests.push_back(hex(hemera::root_of_leaves(chunks.back().leaves)));
+  }
+  std::vector<const epoch_chunks::FileChunks*> rows;
+  for (const auto& c : chunks) rows.push_back(&c);
+  table = epoch_chunks::table_bytes(rows);
+  return digests;
+}
+
+}  // namespace
+
 Status write_epoch(const Epoch& e, const fs::path& dir, const EpochWriteOptions& o) {
   R1_ASSIGN(auto files, epoch_files(e));
   for (const auto& [name, bytes] : o.extra) {
     for (const auto& [have, unused] : files)
-      if (have == name) return Status::internal("epoch: extra file " + name + " is one of the stages' files");
+      if (have == name || name == kChunkTable) return Status::internal("epoch: extra file " + name + " is one of the stages' files");
     files.emplace_back(name, bytes);
   }
   AtomicDirectory out(dir, is_epoch_dir);
   R1_TRY(out.open());
-  for (const auto& [name, bytes] : files) R1_TRY(out.write(name, bytes));
-  R1_TRY(out.write("manifest.json", epoch_manifest(e, files, o)));
+  // The files go to disk (each flushed: mostly waiting on the device) on a thread of their own
+  // while their digests are computed on the TBB workers; then the chunk table, itself digested
+  // whole like any file, and the manifest.
+  auto written = std::async(std::launch::async, [&out, &files]() -> Status {
+    for (const auto& [name, bytes] : files) R1_TRY(out.write(name, bytes));
+    return Status::ok();
+  });
+  std::string table;
+  std::vector<std::string> digests = digest_files(files, o.previous, table);
+  R1_TRY(written.get());
+  R1_TRY(out.write(kChunkTable, table));
+  digests.push_back(file_digest(table));
+  files.emplace_back(kChunkTable, std::move(table));
+  R1_TRY(out.write("manifest.json", epoch_manifest(e, files, digests, o)));
   return out.commit();
 }
 
@@ -377,8 +427,13 @@ Status add_epoch_file(const fs::path& dir, const std::string& name, std::string_
   }
   if (!m.is_object() || m.value("format", "") != kFormat || !m.contains("files") || !m.at("files").is_object())
     return Status::input(manifest.string() + ": not an r1 epoch manifest");
+  if (name == kChunkTable) return Status::internal(std::string("epoch: cannot replace ") + kChunkTable);
   R1_TRY(write_file_atomic(dir / name, bytes));
   m["files"][name] = {{"bytes", bytes.size()}, {"hemera", file_digest(bytes)}};
+  // A replaced file leaves the chunk table's cover; its rows stay, unnamed (R1-EPO-018).
+  if (m.contains("chunked") && m.at("chunked").is_array())
+    for (json& entry : m.at("chunked"))
+      if (entry.is_object() && entry.value("file", json()) == name) entry["file"] = nullptr;
   return write_file_atomic(manifest, m.dump(2) + "\n");
 }
 
@@ -389,25 +444,25 @@ class EpochFiles {
  public:
   EpochFiles(fs::path dir, std::size_t n) : dir_(std::move(dir)), n_(n) {}
 
-  // `keep`, if given, receives each file's tree leaves (R1-EPO-016).
-  Status load(const json& listed, EpochLeaves* keep) {
+  // The files the manifest `m` lists, each checked by `check` (R1-EPO-014, R1-EPO-018); `keep`,
+  // if given, receives each file's tree leaves (R1-EPO-016) and the SHA-256s the table gave.
+  Status load(const json& m, EpochLeaves* keep, DigestCheck check) {
+    const json& listed = m.at("files");
     if (keep) {
       keep->dir = dir_;
       keep->leaves.clear();
+      keep->sha.clear();
+    }
+    // The chunk table first, hashed whole; then each file it covers has its rows.
+    std::map<std::string, std::string_view> rows_of;
+    if (check == DigestCheck::kChunkTable && listed.contains(kChunkTable) && m.contains("chunked")) {
+      R1_TRY(load_one(kChunkTable, listed.at(kChunkTable), keep, {}));
+      R1_ASSIGN(rows_of, table_rows(m.at("chunked"), listed, data_.at(kChunkTable)->text()));
     }
     for (const auto& [name, info] : listed.items()) {
-      const fs::path p = dir_ / name;
-      R1_ASSIGN(auto f, InputFile::open(p.string()));
-      const auto bytes = info.at("bytes").get<std::size_t>();
-      if (f->bytes().size() != bytes)
-        return Status::input(p.string() + ": " + std::to_string(f->bytes().size()) + " bytes, the manifest says " +
-                             std::to_string(bytes) + " (truncated or replaced?)");
-      std::vector<hemera::Digest> leaves = hemera::tree_leaves(f->bytes());
-      const std::string digest = hex(hemera::root_of_leaves(leaves));
-      if (digest != info.at("hemera").get<std::string>())
-        return Status::input(p.string() + ": Hemera digest differs from the manifest (the file was modified)");
-      if (keep) keep->leaves.emplace(name, std::move(leaves));
-      data_.emplace(name, std::move(f));
+      if (data_.count(name)) continue;
+      const auto rows = rows_of.find(name);
+      R1_TRY(load_one(name, info, keep, rows == rows_of.end() ? std::optional<std::string_view>() : rows->second));
     }
     return Status::ok();
   }
@@ -428,6 +483,61 @@ class EpochFiles {
   }
 
  private:
+  // One listed file: its size, then its digest, from every chunk hashed or, with `rows`, from its
+  // rows of the chunk table.
+  Status load_one(const std::string& name, const json& info, EpochLeaves* keep, std::optional<std::string_view> rows) {
+    const fs::path p = dir_ / name;
+    R1_ASSIGN(auto f, InputFile::open(p.string()));
+    const auto bytes = info.at("bytes").get<std::size_t>();
+    if (f->bytes().size() != bytes)
+      return Status::input(p.string() + ": " + std::to_string(f->bytes().size()) + " bytes, the manifest says " +
+                           std::to_string(bytes) + " (truncated or replaced?)");
+    std::vector<hemera::Digest> leaves;
+    if (rows) {
+      hemera::Digest want{};
+      if (!hemera::from_hex(info.at("hemera").get<std::string>(), want))
+        return Status::input((dir_ / "manifest.json").string() + ": " + name + ": digest is not 64 hex digits");
+      R1_ASSIGN(epoch_chunks::FileChunks c, epoch_chunks::check_file(f->bytes(), *rows, want, p.string()));
+      leaves = std::move(c.leaves);
+      if (keep) keep->sha.emplace(name, std::move(c.sha));
+    } else {
+      leaves = hemera::tree_leaves(f->bytes());
+      if (hex(hemera::root_of_leaves(leaves)) != info.at("hemera").get<std::string>())
+        return Status::input(p.string() + ": Hemera digest differs from the manifest (the file was modified)");
+    }
+    if (keep) keep->leaves.emplace(name, std::move(leaves));
+    data_.emplace(name, std::move(f));
+    return Status::ok();
+  }
+
+  // Each covered file's rows of the chunk table `table` (R1-EPO-018): the manifest's `chunked`
+  // list gives the files in row order with the size each had when the table was made; an entry
+  // whose file was replaced since (add_epoch_file) has no name, and its rows are skipped.
+  Result<std::map<std::string, std::string_view>> table_rows(const json& chunked, const json& listed,
+                                                            std::string_view table) const {
+    const std::string where = (dir_ / "manifest.json").string() + ": chunked: ";
+    if (!chunked.is_array()) return Status::input(where + "not a list");
+    std::map<std::string, std::string_view> rows;
+    std::uint64_t at = 0;
+    for (const json& entry : chunked) {
+      if (!entry.is_object() || !entry.contains("bytes") || !entry.at("bytes").is_number_unsigned() || !entry.contains("file") ||
+          !(entry.at("file").is_string() || entry.at("file").is_null()))
+        return Status::input(where + "an entry is not {file, bytes}");
+      const std::uint64_t count = hemera::leaf_count(entry.at("bytes").get<std::uint64_t>());
+      if (count > (table.size() - at) / epoch_chunks::kRowBytes)
+        return Status::input(where + "more chunks than " + kChunkTable + " holds");
+      if (entry.at("file").is_string()) {
+        const std::string name = entry.at("file").get<std::string>();
+        if (name == kChunkTable || !listed.contains(name) || rows.count(name))
+          return Status::input(where + "'" + name.substr(0, 80) + "' is not a listed file, or twice");
+        rows.emplace(name, table.substr(static_cast<std::size_t>(at), static_cast<std::size_t>(count * epoch_chunks::kRowBytes)));
+      }
+      at += count * epoch_chunks::kRowBytes;
+    }
+    if (at != table.size()) return Status::input(where + std::string(kChunkTable) + " holds more rows than its files have chunks");
+    return rows;
+  }
+
   fs::path dir_;
   std::size_t n_;
   std::map<std::string, std::unique_ptr<InputFile>> data_;
@@ -480,7 +590,7 @@ Status read_edges(const EpochFiles& files, const fs::path& path, std::size_t n, 
   return Status::ok();
 }
 
-Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* keep) {
+Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* keep, DigestCheck check) {
   const std::string manifest = (dir / "manifest.json").string();
   if (m.value("format", "") != kFormat) return Status::input(manifest + ": not an r1 epoch manifest");
   const int version = m.value("version", 0);
@@ -540,7 +650,7 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
   }
 
   EpochFiles files(dir, n);
-  R1_TRY(files.load(m.at("files"), keep));
+  R1_TRY(files.load(m, keep, check));
   R1_ASSIGN(const std::string_view ids, files.rows("particles.ids", 32));
   e.ids = format::read_bytes32_column(ids, n);
   R1_ASSIGN(const std::string_view focus, files.rows("focus.q32", 8));
@@ -655,12 +765,12 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
 
 }  // namespace
 
-Result<Epoch> read_epoch(const fs::path& dir, EpochLeaves* leaves) {
+Result<Epoch> read_epoch(const fs::path& dir, EpochLeaves* leaves, DigestCheck check) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return Status::input(dir.string() + ": not an epoch directory (make one with r1 epoch)");
   R1_ASSIGN(auto mf, InputFile::open((dir / "manifest.json").string()));
   try {
-    return read_epoch_json(dir, json::parse(mf->text()), leaves);
+    return read_epoch_json(dir, json::parse(mf->text()), leaves, check);
   } catch (const json::exception& ex) {
     return Status::input((dir / "manifest.json").string() + ": malformed manifest: " + ex.what());
   }

@@ -135,6 +135,118 @@ TEST(EpochIo, DigestsAgainstTheEpochBeforeAreTheWholeFilesDigests) {
   EXPECT_EQ(r1::test::read_file(d / "changed/manifest.json"), want);
 }
 
+// The chunk table (R1-EPO-018): a read through it gives every file's tree leaves as hashing every
+// chunk does, and each chunk's SHA-256; a next epoch written against those is the same manifest;
+// a changed byte anywhere (a file, the table) or a table whose leaves do not make the digest is
+// refused, naming the file; a file replaced by add_epoch_file leaves the table's cover.
+TEST(EpochIo, TheChunkTableChecksTheFilesAndGivesTheirLeaves) {
+  r1::test::TempDir d;
+  r1::EpochWriteOptions quiet;
+  quiet.timings = false;
+  const r1::Epoch prev_epoch = synthetic(3000);
+  ASSERT_TRUE(r1::write_epoch(prev_epoch, d / "prev", quiet).is_ok());
+  const auto m = nlohmann::json::parse(r1::test::read_file(d / "prev/manifest.json"));
+  EXPECT_EQ(m.at("version"), 6);
+  // Every file but the table and the manifest, in the table's row order, with its size.
+  std::size_t rows = 0;
+  for (const auto& entry : m.at("chunked")) {
+    const std::string name = entry.at("file");
+    EXPECT_NE(name, "files.chunks");
+    EXPECT_EQ(entry.at("bytes"), m.at("files").at(name).at("bytes"));
+    rows += r1::hemera::leaf_count(entry.at("bytes").get<std::uint64_t>());
+  }
+  EXPECT_EQ(m.at("chunked").size() + 1, m.at("files").size());
+  const std::string table = r1::test::read_file(d / "prev/files.chunks");
+  EXPECT_EQ(table.size(), rows * 64);
+
+  r1::EpochLeaves whole, fast;
+  ASSERT_TRUE(r1::read_epoch(d / "prev", &whole).is_ok());
+  auto prev = r1::read_epoch(d / "prev", &fast, r1::DigestCheck::kChunkTable);
+  ASSERT_TRUE(prev.is_ok()) << prev.status().message();
+  EXPECT_TRUE(whole.sha.empty());
+  EXPECT_EQ(fast.leaves, whole.leaves);
+  // The SHA-256s are the chunks' (OpenSSL on each chunk of the file as written).
+  const std::string pos = r1::test::read_file(d / "prev/positions.q32");
+  ASSERT_EQ(fast.sha.at("positions.q32").size(), (pos.size() + 4095) / 4096);
+  for (std::size_t i = 0; i * 4096 < pos.size(); ++i) {
+    const auto* at = reinterpret_cast<const std::uint8_t*>(pos.data()) + i * 4096;
+    EXPECT_EQ(fast.sha.at("positions.q32")[i], r1::sha256({at, std::min<std::size_t>(4096, pos.size() - i * 4096)})) << i;
+  }
+  EXPECT_EQ(fast.sha.size() + 1, m.at("files").size());  // the table itself is hashed whole
+
+  // A next epoch against the table's SHA-256s: the manifest of hashing every file whole. PREV's
+  // files are not read again: removing one changes nothing.
+  r1::Epoch next = *prev;
+  for (std::size_t i : {5u, 6u, 2500u}) next.frame.position[i][1] = Q32::from_raw(12345);
+  next.edges.insert(next.edges.begin() + 101, {100, 2000, Q32::kOneRaw, 0});
+  r1::EpochWriteOptions against = quiet;
+  against.previous = &fast;
+  fs::copy(d / "prev", d / "spare");
+  fs::remove(d / "prev/positions.q32");
+  ASSERT_TRUE(r1::write_epoch(next, d / "whole", quiet).is_ok());
+  ASSERT_TRUE(r1::write_epoch(next, d / "reused", against).is_ok());
+  EXPECT_EQ(r1::test::read_file(d / "reused/manifest.json"), r1::test::read_file(d / "whole/manifest.json"));
+  EXPECT_EQ(r1::test::read_file(d / "reused/files.chunks"), r1::test::read_file(d / "whole/files.chunks"));
+  fs::remove_all(d / "prev");
+  fs::rename(d / "spare", d / "prev");
+
+  auto refused = [&](const std::string& needle) {
+    auto r = r1::read_epoch(d / "prev", nullptr, r1::DigestCheck::kChunkTable);
+    EXPECT_FALSE(r.is_ok()) << needle;
+    if (!r.is_ok()) {
+      EXPECT_NE(r.status().message().find(needle), std::string::npos) << r.status().message();
+    }
+  };
+  // A changed byte of a covered file: its chunk's SHA-256 differs.
+  std::string changed = pos;
+  changed[4096 + 7] ^= 1;
+  r1::test::write_file(d / "prev/positions.q32", changed);
+  refused("positions.q32: chunk 1 differs from its SHA-256 in files.chunks");
+  r1::test::write_file(d / "prev/positions.q32", pos);
+  // A changed byte of the table: the table's own digest.
+  std::string t = table;
+  t[100] ^= 1;
+  r1::test::write_file(d / "prev/files.chunks", t);
+  refused("files.chunks: Hemera digest differs from the manifest");
+  // A table whose leaves are changed and which the manifest lists with its new digest: the leaves
+  // no longer merge to the file's digest.
+  std::size_t pos_row = 0;
+  for (const auto& entry : m.at("chunked")) {
+    if (entry.at("file") == "positions.q32") break;
+    pos_row += r1::hemera::leaf_count(entry.at("bytes").get<std::uint64_t>());
+  }
+  t = table;
+  t[pos_row * 64 + 32] ^= 1;
+  r1::test::write_file(d / "prev/files.chunks", t);
+  auto forged = m;
+  forged["files"]["files.chunks"]["hemera"] =
+      r1::hemera::to_hex(r1::hemera::root_hash({reinterpret_cast<const std::uint8_t*>(t.data()), t.size()}));
+  r1::test::write_file(d / "prev/manifest.json", forged.dump(2) + "\n");
+  refused("positions.q32: the leaves in files.chunks do not merge to its Hemera digest");
+  // A cover list naming a file twice, or rows beyond the table.
+  auto twice = forged;
+  twice["files"]["files.chunks"]["hemera"] = m.at("files").at("files.chunks").at("hemera");
+  twice["chunked"].push_back(twice["chunked"][0]);
+  r1::test::write_file(d / "prev/files.chunks", table);
+  r1::test::write_file(d / "prev/manifest.json", twice.dump(2) + "\n");
+  refused("chunked: ");
+  r1::test::write_file(d / "prev/manifest.json", m.dump(2) + "\n");
+  ASSERT_TRUE(r1::read_epoch(d / "prev", nullptr, r1::DigestCheck::kChunkTable).is_ok());
+
+  // Replacing a covered file: its entry loses its name and keeps its rows; the file is hashed whole.
+  ASSERT_TRUE(r1::add_epoch_file(d / "prev", "radius.q32", r1::test::read_file(d / "prev/radius.q32")).is_ok());
+  const auto after = nlohmann::json::parse(r1::test::read_file(d / "prev/manifest.json"));
+  std::size_t unnamed = 0;
+  for (const auto& entry : after.at("chunked")) unnamed += entry.at("file").is_null();
+  EXPECT_EQ(unnamed, 1u);
+  EXPECT_EQ(after.at("chunked").size(), m.at("chunked").size());
+  r1::EpochLeaves again;
+  ASSERT_TRUE(r1::read_epoch(d / "prev", &again, r1::DigestCheck::kChunkTable).is_ok());
+  EXPECT_FALSE(again.sha.count("radius.q32"));
+  EXPECT_TRUE(again.sha.count("positions.q32"));
+  EXPECT_EQ(again.leaves, whole.leaves);
+}
+
 TEST(EpochIo, ModifiedOrTruncatedFilesAreRefused) {
   r1::test::TempDir d;
   ASSERT_TRUE(r1::write_epoch(synthetic(6), d / "ep").is_ok());
@@ -261,21 +373,30 @@ TEST(EpochIo, RecordChunksAreReadBackAndBoundToTheSnapshotDigest) {
   ASSERT_FALSE(w.is_ok());
   EXPECT_NE(w.message().find("4 record chunks for 200 links"), std::string::npos) << w.message();
 
-  // Version 4: no records.chunks, read with none; version 3 is refused.
+  // Versions 4 and 5: no files.chunks (R1-EPO-018), every file hashed even where the table
+  // would be used; version 4 without records.chunks as well. Version 3 is refused.
   ASSERT_TRUE(r1::write_epoch(synthetic(6), d / "v4").is_ok());
   EXPECT_FALSE(fs::exists(d / "v4/records.chunks"));
   auto m = nlohmann::json::parse(r1::test::read_file(d / "v4/manifest.json"));
-  EXPECT_EQ(m["version"], 5);
-  m["version"] = 4;
-  r1::test::write_file(d / "v4/manifest.json", m.dump(2));
-  r = r1::read_epoch(d / "v4");
-  ASSERT_TRUE(r.is_ok()) << r.status().message();
-  EXPECT_TRUE(r->record_chunks.leaves.empty());
+  EXPECT_EQ(m["version"], 6);
+  m["files"].erase("files.chunks");
+  m.erase("chunked");
+  fs::remove(d / "v4/files.chunks");
+  for (const int version : {5, 4}) {
+    m["version"] = version;
+    r1::test::write_file(d / "v4/manifest.json", m.dump(2));
+    r1::EpochLeaves leaves;
+    r = r1::read_epoch(d / "v4", &leaves, r1::DigestCheck::kChunkTable);
+    ASSERT_TRUE(r.is_ok()) << r.status().message();
+    EXPECT_TRUE(r->record_chunks.leaves.empty());
+    EXPECT_TRUE(leaves.sha.empty());
+    EXPECT_EQ(leaves.leaves.size(), m["files"].size());
+  }
   m["version"] = 3;
   r1::test::write_file(d / "v4/manifest.json", m.dump(2));
   r = r1::read_epoch(d / "v4");
   ASSERT_FALSE(r.is_ok());
-  EXPECT_NE(r.status().message().find("epoch version 3 is not supported (r1 reads versions 4 to 5)"), std::string::npos)
+  EXPECT_NE(r.status().message().find("epoch version 3 is not supported (r1 reads versions 4 to 6)"), std::string::npos)
       << r.status().message();
 }
 

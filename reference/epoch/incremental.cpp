@@ -863,6 +863,12 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
     tail_options.encoding.carried_betweenness = std::move(carried);
     info.betweenness_carried = true;
   }
+  // The chain's hierarchy scale (R1-INC-035): PREV's r_0, so the levels are built once instead
+  // of searching r_0 again over positions that moved only on N_h.
+  if (!tail_options.hierarchy.radius0_raw) {
+    tail_options.hierarchy.radius0_raw = prev.hierarchy.radius_raw[0];
+    info.hierarchy_radius_kept = true;
+  }
   R1_TRY(epoch_tail(e, next, g, tail_options, stages, progress));
   info.incremental = true;
   e.update = info;

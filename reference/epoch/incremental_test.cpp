@@ -13,12 +13,14 @@
 #include <functional>
 #include <set>
 
+#include "r1/format/hierarchy.hpp"
 #include "r1/reference/edits.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "r1/reference/hierarchy.hpp"
 #include "r1/solvers/focus.hpp"
 #include "r1/solvers/spectral.hpp"
 #include "rc_cases.hpp"
@@ -392,6 +394,13 @@ TEST(Incremental, CertifiedUpdateBoundsTheExactEigenvectorsAndFreezesTheRest) {
               s * std::sqrt(u.vector_bound[0] * u.vector_bound[0] + u.vector_bound[1] * u.vector_bound[1] +
                             u.vector_bound[2] * u.vector_bound[2]) + 1e-6,
               1e-9 * u.certificate);
+  // The hierarchy (R1-INC-035): the levels of the new positions built at PREV's r_0, no search.
+  EXPECT_TRUE(u.hierarchy_radius_kept);
+  r1::HierarchyOptions at_prev;
+  at_prev.radius0_raw = r.prev.hierarchy.radius_raw[0];
+  auto h = r1::build_hierarchy(r.epoch.frame.position, r.epoch.focus.phi, r.epoch.encoding.color, r.epoch.ids, at_prev);
+  ASSERT_TRUE(h.is_ok()) << h.status().message();
+  EXPECT_EQ(r1::hierarchy_bytes(*h), r1::hierarchy_bytes(r.epoch.hierarchy));
   // The same inputs, the same bytes.
   const UpdateRun again = incremental_run(small_reweight, uo);
   EXPECT_EQ(*r1::epoch_files(again.epoch), *r1::epoch_files(r.epoch));
@@ -407,6 +416,7 @@ TEST(Incremental, FullSolveWhenTheCertificateFailsOrTheCadenceSaysSo) {
   EXPECT_EQ(big.epoch.update->reason.rfind("certificate ", 0), 0u) << big.epoch.update->reason;
   EXPECT_EQ(big.epoch.update->epochs_since_full, 0u);
   EXPECT_EQ(big.epoch.update->full_eigenvalues, big.epoch.spectrum.eigenvalues);
+  EXPECT_FALSE(big.epoch.update->hierarchy_radius_kept);  // a full solve searches r_0 (R1-INC-035)
   // The full solve is the epoch aligned to the earlier anchor, byte for byte.
   r1::EpochOptions o;
   o.anchor = r1::make_anchor(big.s, big.prev.frame);

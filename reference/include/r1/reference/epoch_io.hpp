@@ -15,11 +15,19 @@
 namespace r1 {
 
 // The files of an epoch as read (R1-EPO-016): its directory and each listed file's tree leaves
-// (R1-HASH-024), which were checked against the manifest's digest.
+// (R1-HASH-024), which were checked against the manifest's digest, and, for the files checked
+// through the chunk table (R1-EPO-018), their chunks' SHA-256s.
 struct EpochLeaves {
   std::filesystem::path dir;
   std::map<std::string, std::vector<hemera::Digest>> leaves;
+  std::map<std::string, std::vector<Sha256>> sha;
 };
+
+// How read_epoch checks the files against the manifest's digests (R1-EPO-014, R1-EPO-018):
+// hashing every chunk with Hemera, or, for the files the chunk table covers, each chunk's SHA-256
+// against the table and the table's leaves against the digest (the chain's next epoch reading
+// PREV, which trusts PREV's pairing of SHA-256 and leaf as it trusts the rest of PREV).
+enum class DigestCheck { kHashEveryChunk, kChunkTable };
 
 struct EpochWriteOptions {
   bool timings = true;  // R1-EPO-013: false leaves timings_s out so every byte is reproducible
@@ -31,14 +39,14 @@ struct EpochWriteOptions {
   const EpochLeaves* previous = nullptr;
 };
 
-// The canonical bytes of each output file, by file name (manifest.json excluded).
+// The canonical bytes of each output file of the stages, by file name (manifest.json and the
+// chunk table, which write_epoch makes from these, excluded).
 Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch& e);
-std::string epoch_manifest(const Epoch& e, const std::vector<std::pair<std::string, std::string>>& files,
-                           const EpochWriteOptions& o);
 
 Status write_epoch(const Epoch& e, const std::filesystem::path& dir, const EpochWriteOptions& o = {});
 // `leaves`, if given, receives the directory and every listed file's tree leaves (R1-EPO-016).
-Result<Epoch> read_epoch(const std::filesystem::path& dir, EpochLeaves* leaves = nullptr);
+Result<Epoch> read_epoch(const std::filesystem::path& dir, EpochLeaves* leaves = nullptr,
+                         DigestCheck check = DigestCheck::kHashEveryChunk);
 
 // Adds (or replaces) the file `name` of an existing epoch directory and lists it in the manifest
 // with its size and digest (R1-NRF-030): the file, then the manifest, each written atomically.

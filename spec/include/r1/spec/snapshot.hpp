@@ -81,6 +81,14 @@ struct RecordChunks {
   std::size_t hashed = 0;
 };
 
+// Leaves taken from an earlier version of a chunked byte stream (R1-EPO-017, R1-EPO-018): where
+// both have more than one chunk and previous_sha has a leaf for each, leaves[i] =
+// previous_leaves[i] for every i with sha[i] == previous_sha[i] (a leaf binds its chunk, its index
+// and the ROOT flag alone). Returns the other indices, ascending: the chunks to hash.
+// leaves.size() == sha.size().
+std::vector<std::uint64_t> leaves_by_sha(std::span<const Sha256> sha, std::span<const Sha256> previous_sha,
+                                         std::span<const hemera::Digest> previous_leaves, std::span<hemera::Digest> leaves);
+
 // The snapshot digest and, in `chunks`, every chunk's SHA-256 and leaf. With `previous` (the
 // chunks of an earlier version of the stream: the epoch before in a chain), chunk i takes
 // previous's leaf i instead of being hashed when its SHA-256 is previous's sha[i] and both streams
