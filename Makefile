@@ -74,14 +74,15 @@ test-fast: layering
 	@ctest --test-dir build --output-on-failure -j $(JOBS) -LE slow --timeout 900
 
 # One clang tree for the sanitizers and libFuzzer (R1-TEST-040): ASan + UBSan at -O1 (the tests run
-# several times faster than at -O0 and the sanitizers keep every check), the library
+# several times faster than at -O0 and the sanitizers keep every check) and -g1 (line tables:
+# the sanitizers' reports keep file, line and function; 4-15% less per compile than -g), the library
 # coverage-instrumented for the fuzz targets. The `slow` and `install` labels are skipped (and the
 # slow label's executables not built). The
 # Vulkan device is left out of this tree: Mesa's driver is not built with the sanitizers and its
 # allocations would read as leaks; the main tree runs the Vulkan tests (R1_REQUIRE_VULKAN).
 SAN := build-san
 san-build: deps
-	@cmake -S . -B $(SAN) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+	@cmake -S . -B $(SAN) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" \
 	  -DCMAKE_CXX_COMPILER=clang++-14 -DR1_SANITIZE=ON -DR1_FUZZ=ON -DR1_BUILD_BENCH=OFF -DR1_BUILD_SLOW_TESTS=OFF -DR1_WERROR=ON -DR1_BACKEND_VULKAN=OFF \
 	  $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(SAN) -j $(JOBS)
