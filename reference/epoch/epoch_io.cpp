@@ -380,9 +380,7 @@ std::vector<std::string> digest_files(const std::vector<std::pair<std::string, s
     chunks.push_back(file_chunks(name, bytes, previous));
     digests.push_back(hex(hemera::root_of_leaves(chunks.back().leaves)));
   }
-  std::vector<const epoch_chunks::FileChunks*> rows;
-  for (const auto& c : chunks) rows.push_back(&c);
-  table = epoch_chunks::table_bytes(rows);
+  table = epoch_chunks::table_bytes(chunks);
   return digests;
 }
 

@@ -48,15 +48,15 @@ FileChunks chunk_file(std::span<const std::uint8_t> bytes, std::span<const Sha25
   return f;
 }
 
-std::string table_bytes(std::span<const FileChunks* const> files) {
+std::string table_bytes(std::span<const FileChunks> files) {
   std::size_t rows = 0;
-  for (const FileChunks* f : files) rows += f->sha.size();
+  for (const FileChunks& f : files) rows += f.sha.size();
   std::string out(rows * kRowBytes, '\0');
   char* p = out.data();
-  for (const FileChunks* f : files)
-    for (std::size_t i = 0; i < f->sha.size(); ++i) {
-      std::memcpy(p, f->sha[i].data(), 32);
-      std::memcpy(p + 32, f->leaves[i].data(), 32);
+  for (const FileChunks& f : files)
+    for (std::size_t i = 0; i < f.sha.size(); ++i) {
+      std::memcpy(p, f.sha[i].data(), 32);
+      std::memcpy(p + 32, f.leaves[i].data(), 32);
       p += kRowBytes;
     }
   return out;

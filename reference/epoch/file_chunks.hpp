@@ -35,7 +35,7 @@ FileChunks chunk_file(std::span<const std::uint8_t> bytes, std::span<const Sha25
                       std::span<const hemera::Digest> previous_leaves = {});
 
 // The table's rows for `files` in order.
-std::string table_bytes(std::span<const FileChunks* const> files);
+std::string table_bytes(std::span<const FileChunks> files);
 
 // Checks `bytes` (the file `path`) against `rows`, its rows of the table, and its manifest digest:
 // each chunk's SHA-256 must be the row's, and the rows' leaves must merge to `digest`. Gives the
