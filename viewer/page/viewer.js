@@ -1098,8 +1098,9 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
   }
   function animate(now) {
     const dt = S.lastFrame ? Math.min(0.1, (now - S.lastFrame) / 1000) : 0;
-    // The frame time is the interval between displayed frames (GPU work included), smoothed.
-    if (S.lastFrame && S.meta) S.frameMs = S.frameMs ? 0.8 * S.frameMs + 0.2 * (now - S.lastFrame) : now - S.lastFrame;
+    // The frame time is the interval between displayed frames (GPU work included), smoothed; an
+    // interval after a frame that was not drawn (below) is no frame's time.
+    if (S.lastFrame && S.meta && G.drewLast) S.frameMs = S.frameMs ? 0.8 * S.frameMs + 0.2 * (now - S.lastFrame) : now - S.lastFrame;
     S.lastFrame = now;
     if (S.flights.length) {
       const fl = S.flights[0];
@@ -1130,7 +1131,8 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
       const still = key === G.lastKey;
       G.lastKey = key;
       const due = still || !G.lastCpu || now - G.lastCpu >= 3 * (S.cpuMs || 0);
-      if ((moved || key !== G.tubeKey) && due) {
+      const recompute = (moved || key !== G.tubeKey) && due;
+      if (recompute) {
         G.lastCpu = now;
         const tc = performance.now();
         G.tubeKey = key;
@@ -1142,8 +1144,16 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
         S.tierCounts = cls.counts; S.visible = cls.visible;
         S.cpuMs = performance.now() - tc;
       }
-      draw(c, f);
-      status();
+      // With the flow frozen (?time=T), a frame that would repeat the drawn one is left out: the
+      // canvas keeps its pixels (its buffer is preserved), and a page nobody moves costs no GPU
+      // time (R1-VIEW-044). A frame() request, the camera, the size, a new generation, a transition
+      // or the CPU side's redoing (content arriving, the first exact frame after a move) draws.
+      G.drewLast = S.frozenTime === null || !still || recompute || moved || S.pending.length > 0 || !G.drawn;
+      if (G.drewLast) {
+        draw(c, f);
+        status();
+        G.drawn = (G.drawn || 0) + 1;
+      }
       const waiting = S.pending; S.pending = [];
       for (const r of waiting) r();
     }
@@ -1397,6 +1407,6 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     stats: () => ({ frameMs: S.frameMs, tiers: S.tierCounts.slice(), visible: S.visible, labels: S.labelsDrawn,
                     n: S.n, m: S.m, generation: S.gen, tau: tauCam(S.cam), flying: S.flights.length > 0,
                     portal: S.portal ? S.portal.p : -1, width: S.width, height: S.height, instances: G.instanceCount, cpuMs: S.cpuMs,
-                    tubes: G.tubeCount, content: S.contentDrawn }),
+                    tubes: G.tubeCount, content: S.contentDrawn, drawn: G.drawn || 0 }),
   };
 })();

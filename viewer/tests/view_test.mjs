@@ -86,7 +86,8 @@ try {
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
   const eye = [2000, 300, 800], target = [0, 0, 0];
-  await page.goto(`${main.url}?eye=${eye}&target=${target}&size=480x270`);
+  // The flow frozen (R1-VIEW-044: the page draws when asked or moved); --follow below runs it.
+  await page.goto(`${main.url}?eye=${eye}&target=${target}&size=480x270&time=0`);
   await page.evaluate(() => window.r1view.ready);
 
   // The camera from the URL is the reference's look-at camera (pose 0 of any path from it).
@@ -114,6 +115,15 @@ try {
   check(worst <= 1e-9, `follow-flow's ten steps equal the reference's (largest distance ${worst.toExponential(2)})`);
   const moved = Math.hypot(...steps[9].map((v, i) => v - eye[i]));
   check(moved > 1, `follow-flow moves the camera (${moved.toFixed(1)} scene units in 1 s)`);
+
+  // Idle frames (R1-VIEW-044): with the flow frozen, a page nobody moves draws nothing; a frame()
+  // request draws one.
+  const idle0 = (await page.evaluate(() => window.r1view.stats())).drawn;
+  await new Promise((r) => setTimeout(r, 600));
+  const idle1 = (await page.evaluate(() => window.r1view.stats())).drawn;
+  await page.evaluate(() => window.r1view.frame());
+  const idle2 = (await page.evaluate(() => window.r1view.stats())).drawn;
+  check(idle1 === idle0 && idle2 === idle1 + 1, `a frozen page draws only when asked (${idle0}, ${idle1} after 0.6 s, ${idle2} after frame())`);
 
   // Camera-to-tau (R-1.0 9.5): the page's tau is tau0 (1 + |camera - centroid| / R_scene)^2.
   const meta = await (await fetch(`${main.url}meta.json`)).json();
