@@ -22,7 +22,7 @@ if(R1_FUZZ)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
   # libFuzzer's coverage (edge counters and comparison hooks) instruments the libraries the fuzz
   # targets drive, and the fuzz targets themselves (fuzz/CMakeLists.txt), not the other executables
-  # (the tests, r1): their code is never fuzzed, and the hooks cost about a third of each of their
+  # (the tests, r1): their code is never fuzzed, and the hooks cost about an eighth of each of their
   # compiles and a call per comparison as they run (R1-TEST-040).
   add_compile_options($<$<NOT:$<STREQUAL:$<TARGET_PROPERTY:TYPE>,EXECUTABLE>>:-fsanitize=fuzzer-no-link>)
   add_link_options(-fsanitize=address,undefined)

@@ -117,7 +117,9 @@ try {
   check(moved > 1, `follow-flow moves the camera (${moved.toFixed(1)} scene units in 1 s)`);
 
   // Idle frames (R1-VIEW-044): with the flow frozen, a page nobody moves draws nothing; a frame()
-  // request draws one.
+  // request draws one. Two frames first: the one that shows follow-flow's last camera, and the one
+  // whose CPU side is redone for it (the first exact frame after a move).
+  await page.evaluate(async () => { await window.r1view.frame(); await window.r1view.frame(); });
   const idle0 = (await page.evaluate(() => window.r1view.stats())).drawn;
   await new Promise((r) => setTimeout(r, 600));
   const idle1 = (await page.evaluate(() => window.r1view.stats())).drawn;
