@@ -412,7 +412,8 @@
   const overlay = document.getElementById('labels');
   const ctx2d = overlay.getContext('2d');
   const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true });
-  const G = {};
+  // drawn: frames drawn so far; drewLast: whether the last animation frame drew (R1-VIEW-044).
+  const G = { drawn: 0, drewLast: false };
   const FAR = 1e6;
 
   const common = `#version 300 es
@@ -1148,11 +1149,11 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
       // canvas keeps its pixels (its buffer is preserved), and a page nobody moves costs no GPU
       // time (R1-VIEW-044). A frame() request, the camera, the size, a new generation, a transition
       // or the CPU side's redoing (content arriving, the first exact frame after a move) draws.
-      G.drewLast = S.frozenTime === null || !still || recompute || moved || S.pending.length > 0 || !G.drawn;
+      G.drewLast = S.frozenTime === null || !still || recompute || moved || S.pending.length > 0 || G.drawn === 0;
       if (G.drewLast) {
         draw(c, f);
         status();
-        G.drawn = (G.drawn || 0) + 1;
+        G.drawn += 1;
       }
       const waiting = S.pending; S.pending = [];
       for (const r of waiting) r();
@@ -1407,6 +1408,6 @@ void main() { outColor = vec4(oetf(texelFetch(uScene, ivec2(gl_FragCoord.xy), 0)
     stats: () => ({ frameMs: S.frameMs, tiers: S.tierCounts.slice(), visible: S.visible, labels: S.labelsDrawn,
                     n: S.n, m: S.m, generation: S.gen, tau: tauCam(S.cam), flying: S.flights.length > 0,
                     portal: S.portal ? S.portal.p : -1, width: S.width, height: S.height, instances: G.instanceCount, cpuMs: S.cpuMs,
-                    tubes: G.tubeCount, content: S.contentDrawn, drawn: G.drawn || 0 }),
+                    tubes: G.tubeCount, content: S.contentDrawn, drawn: G.drawn }),
   };
 })();
