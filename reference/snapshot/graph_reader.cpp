@@ -7,6 +7,10 @@
 #include "r1/reference/snapshot_builder.hpp"
 #include "toml_subset.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
 namespace r1::detail {
 
 namespace {
@@ -58,6 +62,77 @@ T get_le(const std::uint8_t* p, std::size_t n) {
   return v;
 }
 
+// Snapshots with at least this many records are parsed in two halves (R1-IN-021).
+constexpr std::size_t kSplitRecords = std::size_t{1} << 16;
+
+struct RangeContext {
+  const std::uint8_t* base;  // the first record
+  std::uint64_t offset;      // its byte offset in the file, for messages
+  const std::string& file;
+  const SnapshotConfig& config;
+};
+
+// Numbers of a part of the records that is not the first: its own tables, by first appearance.
+struct LocalNumbering {
+  std::vector<ParticleId> particles;
+  std::vector<NeuronId> neurons;
+  IdIndex particle_index, neuron_index;
+  std::uint32_t particle_by_id(const ParticleId& id) { return particle_index.intern(id, particles); }
+  std::uint32_t neuron_by_id(const NeuronId& id) { return neuron_index.intern(id, neurons); }
+  void prefetch_particle(const ParticleId& id) const { particle_index.prefetch_slot(id); }
+};
+
+// Decodes and checks records [first, last) into out[first, last), numbering ids with `numbering` (the
+// snapshot's builder or a LocalNumbering); `last_height` is the height of the record before
+// `first` (0 for the first record). Returns the first bad record's error.
+template <class Numbering, class Tick>
+Status parse_records(const RangeContext& ctx, std::size_t first, std::size_t last, std::uint64_t last_height,
+                     Numbering& numbering, Link* out, const Tick& tick) {
+  // The id lookups are cache misses on large snapshots: the index slots of the record kAhead on
+  // are fetched early (from the part's second record on, when its index is not empty).
+  constexpr std::size_t kAhead = 16;
+  for (std::size_t i = first; i < last; ++i) {
+    if (i > first && i + kAhead < last) {
+      ParticleId ahead;
+      for (const std::size_t field : {32u, 64u}) {
+        std::memcpy(ahead.data(), ctx.base + (i + kAhead) * kRecordBytes + field, 32);
+        numbering.prefetch_particle(ahead);
+      }
+    }
+    const std::uint8_t* r = ctx.base + i * kRecordBytes;
+    const std::uint64_t off = ctx.offset + i * kRecordBytes;
+    auto fail = [&](std::size_t field, const std::string& what) {
+      return Status::input(ctx.file + ": byte " + std::to_string(off + field) + ": record " + std::to_string(i) + ": " + what);
+    };
+    Link l;
+    l.token = get_le<std::uint32_t>(r + 96, 4);
+    l.amount = get_le<u128>(r + 100, 16);
+    l.valence = static_cast<std::int8_t>(r[116]);
+    l.height = get_le<std::uint64_t>(r + 117, 8);
+    if (l.valence < -1 || l.valence > 1) return fail(116, "valence " + std::to_string(l.valence) + " is not -1, 0 or +1");
+    if (r[125] != 0 || r[126] != 0 || r[127] != 0) return fail(125, "padding bytes are not zero");
+    if (ctx.config.tokens.find(l.token) == ctx.config.tokens.end())
+      return fail(96, "token " + std::to_string(l.token) + " is not in the config's [tokens] table");
+    if (l.height < 1 || l.height > ctx.config.block)
+      return fail(117, "block height " + std::to_string(l.height) + " is outside [1, " + std::to_string(ctx.config.block) + "]");
+    if (l.height < last_height)
+      return fail(117, "block height " + std::to_string(l.height) + " after " + std::to_string(last_height) +
+                           ": records must be in chain order");
+    last_height = l.height;
+    NeuronId nu;
+    ParticleId from, to;
+    std::copy(r, r + 32, nu.begin());
+    std::copy(r + 32, r + 64, from.begin());
+    std::copy(r + 64, r + 96, to.begin());
+    l.neuron = numbering.neuron_by_id(nu);
+    l.from = numbering.particle_by_id(from);  // source before target: decision 2
+    l.to = numbering.particle_by_id(to);
+    out[i] = l;
+    tick(i);
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file, const ProgressFn& progress) {
@@ -83,51 +158,49 @@ Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file
     return Status::input(file + ": byte " + std::to_string(links->offset) + ": cyberlinks size " +
                          std::to_string(links->body.size()) + " is not a multiple of 128");
   const std::size_t n = links->body.size() / kRecordBytes;
-  s.links.reserve(n);
   const auto* base = reinterpret_cast<const std::uint8_t*>(links->body.data());
-  std::uint64_t last_height = 0;
-  // The id lookups are cache misses on large snapshots: the index slots of the record kAhead on
-  // are fetched early (from the second record on, when the index is not empty).
-  constexpr std::size_t kAhead = 16;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i > 0 && i + kAhead < n) {
-      ParticleId ahead;
-      for (const std::size_t field : {32u, 64u}) {
-        std::memcpy(ahead.data(), base + (i + kAhead) * kRecordBytes + field, 32);
-        b.prefetch_particle(ahead);
-      }
+  // Two halves of the records on two threads (R1-IN-021): the first numbers into the builder as a
+  // serial parse would; the second into tables of its own, which are then numbered in their order
+  // of first appearance after the first half's: the serial numbering exactly. Small snapshots stay
+  // on one thread.
+  const std::size_t half = n >= kSplitRecords ? n / 2 : n;
+  Status first_status = Status::ok(), second_status = Status::ok();
+  const RangeContext ctx{base, links->offset, file, s.config};
+  // Sized first (the pages touched here, not by the parse), so both halves write in place.
+  s.links.resize(n);
+  const auto parse_first = [&] {
+    first_status = parse_records(ctx, 0, half, 0, b, s.links.data(), [&](std::size_t i) {
+      if ((i & 0xFFFF) == 0) report(progress, "reading records", half < n ? 2 * i : i, n);
+    });
+  };
+  if (half == n) {
+    parse_first();
+  } else {
+    // The second half's order check starts from the height of the record before it.
+    const std::uint64_t before = get_le<std::uint64_t>(base + (half - 1) * kRecordBytes + 117, 8);
+    LocalNumbering local;
+    tbb::parallel_invoke(parse_first,
+                         [&] { second_status = parse_records(ctx, half, n, before, local, s.links.data(), [](std::size_t) {}); });
+    R1_TRY(first_status);
+    R1_TRY(second_status);
+    // The second half's particles and neurons in its order of first appearance, numbered after the
+    // first half's (those it already holds keep their numbers), then its links renumbered.
+    std::vector<std::uint32_t> particle(local.particles.size()), neuron(local.neurons.size());
+    for (std::size_t j = 0; j < local.neurons.size(); ++j) neuron[j] = b.neuron_by_id(local.neurons[j]);
+    for (std::size_t j = 0; j < local.particles.size(); ++j) {
+      if (j + 16 < local.particles.size()) b.prefetch_particle(local.particles[j + 16]);
+      particle[j] = b.particle_by_id(local.particles[j]);
     }
-    const std::uint8_t* r = base + i * kRecordBytes;
-    const std::uint64_t off = links->offset + i * kRecordBytes;
-    auto fail = [&](std::size_t field, const std::string& what) {
-      return Status::input(file + ": byte " + std::to_string(off + field) + ": record " + std::to_string(i) + ": " + what);
-    };
-    Link l;
-    l.token = get_le<std::uint32_t>(r + 96, 4);
-    l.amount = get_le<u128>(r + 100, 16);
-    l.valence = static_cast<std::int8_t>(r[116]);
-    l.height = get_le<std::uint64_t>(r + 117, 8);
-    if (l.valence < -1 || l.valence > 1) return fail(116, "valence " + std::to_string(l.valence) + " is not -1, 0 or +1");
-    if (r[125] != 0 || r[126] != 0 || r[127] != 0) return fail(125, "padding bytes are not zero");
-    if (s.config.tokens.find(l.token) == s.config.tokens.end())
-      return fail(96, "token " + std::to_string(l.token) + " is not in the config's [tokens] table");
-    if (l.height < 1 || l.height > s.config.block)
-      return fail(117, "block height " + std::to_string(l.height) + " is outside [1, " + std::to_string(s.config.block) + "]");
-    if (l.height < last_height)
-      return fail(117, "block height " + std::to_string(l.height) + " after " + std::to_string(last_height) +
-                           ": records must be in chain order");
-    last_height = l.height;
-    NeuronId nu;
-    ParticleId from, to;
-    std::copy(r, r + 32, nu.begin());
-    std::copy(r + 32, r + 64, from.begin());
-    std::copy(r + 64, r + 96, to.begin());
-    l.neuron = b.neuron_by_id(nu);
-    l.from = b.particle_by_id(from);  // source before target: decision 2
-    l.to = b.particle_by_id(to);
-    b.add_link(l);
-    if ((i & 0xFFFF) == 0) report(progress, "reading records", i, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(half, n, std::size_t{1} << 16), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        Link& l = s.links[i];
+        l.neuron = neuron[l.neuron];
+        l.from = particle[l.from];
+        l.to = particle[l.to];
+      }
+    });
   }
+  R1_TRY(first_status);
   for (const auto& sec : c.sections) {
     if (sec.name != "titles" && sec.name != "crystal") continue;
     if (sec.binary) return Status::input(file + ": section '" + sec.name + "' must be text");

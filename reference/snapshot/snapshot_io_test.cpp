@@ -1,6 +1,9 @@
 // Snapshot readers and writers: canonical order, exact weights, round trips (R1-IN-001..024).
 #include "r1/reference/snapshot_io.hpp"
 
+#include <cstring>
+#include <set>
+
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
@@ -139,6 +142,95 @@ TEST(GraphFile, CanonicalWriteReadWriteIsStable) {
   EXPECT_EQ(back->titles, s.titles);
   EXPECT_EQ(back->particles, s.particles);
   EXPECT_EQ(r1::graph_file_bytes(*back, "x"), bytes);
+}
+
+// A snapshot of 70,000 links (past the two-halves threshold of R1-IN-021) numbered serially by
+// the builder: ids drawn so that the second half reuses first-half particles and neurons and
+// brings new ones, some of them first seen as a link's target.
+r1::Snapshot two_halves_snapshot() {
+  r1::SnapshotBuilder b("two halves");
+  r1::Snapshot& s = b.snapshot();
+  s.config = r1::text_input_config();
+  s.config.block = 1000;
+  const auto id_of = [](std::uint64_t k, std::uint8_t kind) {
+    std::array<std::uint8_t, 32> id{};
+    std::uint64_t x = k * 0x9E3779B97F4A7C15ull + kind;
+    for (std::size_t w = 0; w < 4; ++w) {
+      x ^= x >> 31;
+      x *= 0xBF58476D1CE4E5B9ull;
+      x ^= x >> 27;
+      std::memcpy(id.data() + 8 * w, &x, 8);
+    }
+    return id;
+  };
+  constexpr std::uint64_t kLinks = 70000;
+  for (std::uint64_t i = 0; i < kLinks; ++i) {
+    r1::Link l;
+    // Particle ranges grow with i (new ones throughout), and every third link reaches back.
+    const std::uint64_t reach = 16 + i / 4;
+    l.from = b.particle_by_id(id_of(i % 3 == 0 ? (i * 7919) % reach : reach - 1 - (i % 5), 1));
+    l.to = b.particle_by_id(id_of((i * 104729 + 13) % (reach + 3), 1));
+    l.neuron = b.neuron_by_id(id_of((i * 31) % (3 + i / 2000), 2));
+    l.token = 0;
+    l.amount = (u128{1} << 32) + i;
+    l.valence = static_cast<std::int8_t>(static_cast<int>(i % 3) - 1);
+    l.height = 1 + i / 100;
+    b.add_link(l);
+  }
+  auto r = b.finish();
+  EXPECT_TRUE(r.is_ok());
+  return std::move(r).value();
+}
+
+TEST(GraphReader, TwoHalvesGiveTheSerialNumbering) {
+  const r1::Snapshot s = two_halves_snapshot();
+  ASSERT_EQ(s.links.size(), 70000u);
+  // The second half holds particles and neurons that the first does not.
+  std::set<std::uint32_t> first_half;
+  for (std::size_t i = 0; i < 35000; ++i) first_half.insert(s.links[i].to);
+  std::size_t new_in_second = 0;
+  for (std::size_t i = 35000; i < s.links.size(); ++i) new_in_second += first_half.count(s.links[i].to) == 0;
+  ASSERT_GT(new_in_second, 1000u);
+  ASSERT_GT(s.links.back().neuron, s.links[34999].neuron);
+  r1::test::TempDir d;
+  const std::string bytes = r1::graph_file_bytes(s, "x");
+  r1::test::write_file(d / "x.graph", bytes);
+  auto back = r1::read_snapshot((d / "x.graph").string());
+  ASSERT_TRUE(back.is_ok()) << back.status().message();
+  EXPECT_EQ(back->particles, s.particles);
+  EXPECT_EQ(back->neurons, s.neurons);
+  ASSERT_EQ(back->links.size(), s.links.size());
+  for (std::size_t i = 0; i < s.links.size(); ++i) {
+    const r1::Link &a = back->links[i], &e = s.links[i];
+    ASSERT_TRUE(a.from == e.from && a.to == e.to && a.neuron == e.neuron && a.amount == e.amount &&
+                a.height == e.height && a.valence == e.valence && a.token == e.token)
+        << "link " << i;
+  }
+  EXPECT_EQ(r1::graph_file_bytes(*back, "x"), bytes);
+}
+
+TEST(GraphReader, TwoHalvesReportTheFirstBadRecordAsASerialParseWould) {
+  const r1::Snapshot s = two_halves_snapshot();
+  const std::string bytes = r1::graph_file_bytes(s, "x");
+  auto c = r1::parse_container(bytes, "x");
+  ASSERT_TRUE(c.is_ok());
+  const std::size_t at = c->find("cyberlinks")->offset;
+  const auto read_with = [&](const std::vector<std::pair<std::size_t, std::uint8_t>>& pokes) {
+    std::string b = bytes;
+    for (const auto& [record_byte, value] : pokes) b[at + record_byte] = static_cast<char>(value);
+    r1::test::TempDir d;
+    r1::test::write_file(d / "x.graph", b);
+    auto r = r1::read_snapshot((d / "x.graph").string());
+    return r.is_ok() ? std::string("ok") : r.status().message();
+  };
+  const auto byte = [](std::size_t record, std::size_t field) { return record * 128 + field; };
+  // A bad valence in the second half alone, then in both halves: the first half's error wins.
+  EXPECT_NE(read_with({{byte(50000, 116), 5}}).find("record 50000: valence 5"), std::string::npos);
+  EXPECT_NE(read_with({{byte(50000, 116), 5}, {byte(20000, 126), 1}}).find("record 20000: padding"), std::string::npos);
+  // The second half's first record checked against the height of the record before it.
+  EXPECT_NE(read_with({{byte(35000, 117), 0}, {byte(35000, 118), 0}}).find("record 35000: block height"), std::string::npos);
+  EXPECT_NE(read_with({{byte(35000, 117), 1}, {byte(35000, 118), 0}}).find("record 35000: block height 1 after 350"),
+            std::string::npos);
 }
 
 TEST(GraphFile, ContainerKeepsEveryByte) {
