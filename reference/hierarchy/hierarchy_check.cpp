@@ -25,19 +25,17 @@ Status check_hierarchy(const Hierarchy& h, const std::vector<std::array<Q32, 3>>
   const std::size_t n = pos.size();
   if (phi.size() != n || color.size() != n || ids.size() != n)
     return Status::internal("hierarchy check: input lengths differ");
-  // Canonical particle rank (R1-HIER-012), for the colour tie rule: phi descending, ties by the
-  // id bytes (their first eight as a big-endian number first, the rest only when those tie).
+  // Canonical particle order (R1-HIER-012), for the colour tie rule: phi descending, ties by the
+  // id bytes (their first eight as a big-endian number first, the rest only when those tie). A
+  // comparison, not a rank table: only colour ties need it, and sorting every particle was most
+  // of the check's time at 10^6 particles.
   std::vector<std::uint64_t> prefix(n);
   for (std::size_t p = 0; p < n; ++p)
     for (std::size_t b = 0; b < 8; ++b) prefix[p] = (prefix[p] << 8) | ids[p][b];
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+  const auto before = [&](std::size_t a, std::size_t b) {
     if (phi[a].raw != phi[b].raw) return phi[a].raw > phi[b].raw;
     return prefix[a] != prefix[b] ? prefix[a] < prefix[b] : ids[a] < ids[b];
-  });
-  std::vector<std::size_t> rank(n);
-  for (std::size_t r = 0; r < n; ++r) rank[order[r]] = r;
+  };
   std::int64_t total_phi = 0;
   for (const Q32 v : phi) total_phi += v.raw;
 
@@ -110,22 +108,22 @@ Status check_hierarchy(const Hierarchy& h, const std::vector<std::array<Q32, 3>>
       if (s != node.phi_raw) return fail(l, id, "phi_raw is not the exact sum");
       level_phi += s;
       // The dominant colour: the most phi, ties by the colour whose first member comes first in
-      // canonical order (ranks are distinct, so the best is unique).
+      // canonical order (ids are distinct, so the best is unique).
       std::sort(by_colour.begin(), by_colour.end(), [&](std::size_t a, std::size_t b) { return color[a] < color[b]; });
       std::int64_t best_w = -1;
-      std::size_t best_rank = 0;
+      std::size_t best_first = 0;  // compared only once best_w is a colour's weight
       Color best{};
       for (std::size_t i = 0; i < by_colour.size();) {
         std::int64_t w = 0;
-        std::size_t first = rank[by_colour[i]];
+        std::size_t first = by_colour[i];  // the colour's member first in canonical order
         std::size_t j = i;
         for (; j < by_colour.size() && color[by_colour[j]] == color[by_colour[i]]; ++j) {
           w += phi[by_colour[j]].raw;
-          first = std::min(first, rank[by_colour[j]]);
+          if (before(by_colour[j], first)) first = by_colour[j];
         }
-        if (w > best_w || (w == best_w && first < best_rank)) {
+        if (w > best_w || (w == best_w && before(first, best_first))) {
           best_w = w;
-          best_rank = first;
+          best_first = first;
           best = color[by_colour[i]];
         }
         i = j;

@@ -749,6 +749,38 @@ TEST(HierarchyCheck, DetectsEachKindOfDamage) {
   EXPECT_TRUE(damaged([](Hierarchy& h) { h.levels[0][0].children.push_back(h.levels[0][1].children[0]); }));
 }
 
+// The colour tie rule (R1-HIER-015): with every phi equal and two colours taking turns, many nodes
+// hold both colours with the same phi; the tie goes to the colour whose first member in canonical
+// order (here: the lowest id) comes first. The checker agrees with the builder on each, and
+// catches the other tied colour.
+TEST(HierarchyCheck, ColourTiesGoToTheCanonicallyFirstMember) {
+  Layout L = make_layout(Shape::kBlobs, 256, 5);
+  for (std::size_t p = 0; p < L.phi.size(); ++p) {
+    L.phi[p] = Q32::from_raw(std::int64_t{1} << 24);  // 256 x 2^-8 = 1 exactly
+    L.color[p] = p % 2 == 0 ? Color{10, 20, 30} : Color{200, 100, 50};
+  }
+  const Hierarchy good = build_ok(L);
+  ASSERT_TRUE(r1::check_hierarchy(good, L.pos, L.phi, L.color, L.ids).is_ok());
+  std::size_t ties = 0;
+  for (std::size_t l = 0; l < good.levels.size(); ++l)
+    for (std::size_t id = 0; id < good.levels[l].size(); ++id) {
+      std::size_t even = 0, odd = 0;
+      std::optional<std::size_t> first;  // the member with the lowest id
+      for (std::size_t p = 0; p < L.ids.size(); ++p) {
+        if (good.cluster_of[l][p] != id) continue;
+        (p % 2 == 0 ? even : odd) += 1;
+        if (!first || L.ids[p] < L.ids[*first]) first = p;
+      }
+      if (even != odd) continue;
+      ++ties;
+      EXPECT_EQ(good.levels[l][id].color, L.color[*first]) << "level " << l << " node " << id;
+      Hierarchy h = good;
+      h.levels[l][id].color = L.color[*first + 1 - 2 * (*first % 2)];  // the other colour
+      EXPECT_FALSE(r1::check_hierarchy(h, L.pos, L.phi, L.color, L.ids).is_ok()) << "level " << l << " node " << id;
+    }
+  EXPECT_GT(ties, 3u);
+}
+
 // ---- input errors -----------------------------------------------------------------------------------
 
 TEST(HierarchyErrors, BadInputsAreInputErrors) {
