@@ -46,6 +46,7 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
   EXPECT_EQ(u.at("vector_bound").at(4), nullptr);
   // The hierarchy at PREV's scale (R1-INC-035); the manifest's radii say so.
   EXPECT_EQ(u.at("hierarchy_radius"), "kept");
+  EXPECT_EQ(u.at("radius_scale"), "kept");
   EXPECT_EQ(manifest(c.d / "inc").at("hierarchy").at("radii"), manifest(c.prev).at("hierarchy").at("radii"));
   // The digest from PREV's record chunks (R1-EPO-017) is the one `r1 info` finds by hashing every
   // record, and the chunks are those of an epoch of NEXT by itself.
@@ -79,6 +80,7 @@ TEST(CliIncremental, FromWritesTheUpdateRecordAndEveryBackendTheSameBytes) {
             0);
   EXPECT_EQ(manifest(c.d / "full").at("update").at("reason"), "forced (--full)");
   EXPECT_EQ(manifest(c.d / "full").at("update").at("hierarchy_radius"), "searched");
+  EXPECT_EQ(manifest(c.d / "full").at("update").at("radius_scale"), "measured");
   EXPECT_EQ(r1::test::read_file(c.d / "full/records.chunks"), r1::test::read_file(c.d / "alone/records.chunks"));
   EXPECT_FALSE(manifest(c.d / "full").at("alignment").at("genesis").get<bool>());
 }

@@ -16,6 +16,9 @@
 #include <memory>
 #include <optional>
 
+#include <functional>
+#include <tbb/parallel_for.h>
+
 #include "../snapshot/text_util.hpp"
 #include "file_chunks.hpp"
 #include "r1/format/arrays.hpp"
@@ -165,6 +168,7 @@ json update_json(const UpdateInfo& u) {
           {"certified", u.certified},
           {"betweenness", u.betweenness_carried ? "carried" : "computed"},
           {"hierarchy_radius", u.hierarchy_radius_kept ? "kept" : "searched"},
+          {"radius_scale", u.radius_scale_kept ? "kept" : "measured"},
           {"delta_norm", u.delta_norm},
           {"delta_norm_since_full", u.delta_norm_since_full},
           {"full_eigenvalues", u.full_eigenvalues},
@@ -191,6 +195,7 @@ UpdateInfo update_from(const json& j) {
   u.betweenness_carried = j.at("betweenness").get<std::string>() == "carried";
   // Absent in epochs made before R1-INC-035 kept the radius: they searched it.
   u.hierarchy_radius_kept = j.value("hierarchy_radius", std::string("searched")) == "kept";
+  u.radius_scale_kept = j.value("radius_scale", std::string("measured")) == "kept";
   u.delta_norm = j.at("delta_norm").get<double>();
   u.delta_norm_since_full = j.at("delta_norm_since_full").get<double>();
   u.full_eigenvalues = j.at("full_eigenvalues").get<std::array<double, 6>>();
@@ -217,68 +222,75 @@ Result<std::vector<std::pair<std::string, std::string>>> epoch_files(const Epoch
   const std::size_t n = e.ids.size();
   if (e.out_rows.size() != n)
     return Status::internal("epoch: " + std::to_string(e.out_rows.size()) + " out-row digests for " + std::to_string(n) + " particles");
-  std::vector<std::pair<std::string, std::string>> f;
-  {
-    const std::span<const format::Bytes32> ids[] = {e.ids};
-    f.emplace_back("particles.ids", format::bytes32_rows(ids, n));
-  }
-  {
-    std::string t;
-    for (std::size_t i = 0; i < n && i < e.titles.size(); ++i)
-      if (!e.titles[i].empty()) t += hex(e.ids[i]) + "\t" + text::escape_cell(e.titles[i]) + "\n";
-    f.emplace_back("titles.tsv", std::move(t));
-  }
-  f.emplace_back("focus.q32", q32_column(e.focus.phi));
-  if (!e.focus.heat.empty()) {
-    if (e.focus.heat.size() != n)
-      return Status::internal("epoch: " + std::to_string(e.focus.heat.size()) + " heat values for " + std::to_string(n) + " particles");
-    f.emplace_back("heat.q32", q32_column(e.focus.heat));  // R1-INC-052: what the next epoch's focus update starts from
-  }
-  f.emplace_back("spectral.q32", format::q32_rows(e.spectrum.u, n));
-  f.emplace_back("positions.q32", format::q32_triples(e.frame.position));
-  f.emplace_back("radius.q32", q32_column(e.encoding.radius));
-  f.emplace_back("luminosity.q32", q32_column(e.encoding.luminosity));
-  f.emplace_back("hue.q32", q32_column(e.encoding.hue));
-  f.emplace_back("saturation.q32", q32_column(e.encoding.saturation));
-  {
-    std::string r, s, c;
-    for (Role x : e.encoding.role) r.push_back(static_cast<char>(x));
-    for (Shape x : e.encoding.shape) s.push_back(static_cast<char>(x));
-    for (const auto& rgb : e.encoding.color) c.append(reinterpret_cast<const char*>(rgb.data()), 3);
-    f.emplace_back("role.u8", std::move(r));
-    f.emplace_back("shape.u8", std::move(s));
-    f.emplace_back("color.rgb8", std::move(c));
-  }
-  f.emplace_back("clusters.u32", format::u32_rows(e.hierarchy.cluster_of, n));
-  f.emplace_back("hierarchy.bin", hierarchy_bytes(e.hierarchy));
-  f.emplace_back("edges.bin", format::edge_rows(e.edges));
-  f.emplace_back("outrows.u64", format::u64_column(e.out_rows));
-  if (!e.encoding.betweenness.empty()) {
-    if (e.encoding.betweenness.size() != n)
-      return Status::internal("epoch: " + std::to_string(e.encoding.betweenness.size()) + " betweenness values for " + std::to_string(n) +
-                              " particles");
-    f.emplace_back("betweenness.f64", format::f64_column(e.encoding.betweenness));
-  }
-  // What an incremental epoch carries (R1-INC-038): the exact image numerators, five per particle.
-  if (e.spectrum.sums_shift >= 0) {
-    if (e.spectrum.image.size() != n * 5)
-      return Status::internal("epoch: " + std::to_string(e.spectrum.image.size()) + " image numerators for " + std::to_string(n) +
-                              " particles");
-    f.emplace_back("image.i128", format::i128_column(e.spectrum.image));
-  }
-  // The record stream's chunks (R1-EPO-017): SHA-256 then leaf, per chunk.
-  if (!e.record_chunks.leaves.empty()) {
-    const std::size_t chunks = record_chunk_count(e.links);
-    if (e.record_chunks.leaves.size() != chunks || e.record_chunks.sha.size() != chunks)
-      return Status::internal("epoch: " + std::to_string(e.record_chunks.leaves.size()) + " record chunks for " +
-                              std::to_string(e.links) + " links");
-    const std::span<const format::Bytes32> columns[] = {e.record_chunks.sha, e.record_chunks.leaves};
-    f.emplace_back("records.chunks", format::bytes32_rows(columns, chunks));
-  }
+  if (!e.focus.heat.empty() && e.focus.heat.size() != n)
+    return Status::internal("epoch: " + std::to_string(e.focus.heat.size()) + " heat values for " + std::to_string(n) + " particles");
+  if (!e.encoding.betweenness.empty() && e.encoding.betweenness.size() != n)
+    return Status::internal("epoch: " + std::to_string(e.encoding.betweenness.size()) + " betweenness values for " + std::to_string(n) +
+                            " particles");
+  if (e.spectrum.sums_shift >= 0 && e.spectrum.image.size() != n * 5)
+    return Status::internal("epoch: " + std::to_string(e.spectrum.image.size()) + " image numerators for " + std::to_string(n) +
+                            " particles");
+  const std::size_t chunks = record_chunk_count(e.links);
+  if (!e.record_chunks.leaves.empty() && (e.record_chunks.leaves.size() != chunks || e.record_chunks.sha.size() != chunks))
+    return Status::internal("epoch: " + std::to_string(e.record_chunks.leaves.size()) + " record chunks for " +
+                            std::to_string(e.links) + " links");
   // The anchor: the first min(1024, n) particles with their positions (R1-FRM, decision 7).
   Anchor anchor;
   for (std::size_t i = 0; i < anchor_count(n); ++i) anchor.entries.push_back({e.ids[i], e.frame.position[i]});
   R1_ASSIGN(std::string anchor_file, anchor_bytes(anchor));
+
+  // Each file's bytes by a job of its own, the jobs on the TBB workers (hundreds of megabytes at
+  // 10^6 particles; the files come out in this order whatever runs when).
+  std::vector<std::pair<std::string, std::function<std::string()>>> jobs;
+  jobs.emplace_back("particles.ids", [&] {
+    const std::span<const format::Bytes32> ids[] = {e.ids};
+    return format::bytes32_rows(ids, n);
+  });
+  jobs.emplace_back("titles.tsv", [&] {
+    std::string t;
+    for (std::size_t i = 0; i < n && i < e.titles.size(); ++i)
+      if (!e.titles[i].empty()) t += hex(e.ids[i]) + "\t" + text::escape_cell(e.titles[i]) + "\n";
+    return t;
+  });
+  jobs.emplace_back("focus.q32", [&] { return q32_column(e.focus.phi); });
+  // R1-INC-052: what the next epoch's focus update starts from.
+  if (!e.focus.heat.empty()) jobs.emplace_back("heat.q32", [&] { return q32_column(e.focus.heat); });
+  jobs.emplace_back("spectral.q32", [&] { return format::q32_rows(e.spectrum.u, n); });
+  jobs.emplace_back("positions.q32", [&] { return format::q32_triples(e.frame.position); });
+  jobs.emplace_back("radius.q32", [&] { return q32_column(e.encoding.radius); });
+  jobs.emplace_back("luminosity.q32", [&] { return q32_column(e.encoding.luminosity); });
+  jobs.emplace_back("hue.q32", [&] { return q32_column(e.encoding.hue); });
+  jobs.emplace_back("saturation.q32", [&] { return q32_column(e.encoding.saturation); });
+  jobs.emplace_back("role.u8", [&] {
+    std::string r;
+    for (Role x : e.encoding.role) r.push_back(static_cast<char>(x));
+    return r;
+  });
+  jobs.emplace_back("shape.u8", [&] {
+    std::string s;
+    for (Shape x : e.encoding.shape) s.push_back(static_cast<char>(x));
+    return s;
+  });
+  jobs.emplace_back("color.rgb8", [&] {
+    std::string c;
+    for (const auto& rgb : e.encoding.color) c.append(reinterpret_cast<const char*>(rgb.data()), 3);
+    return c;
+  });
+  jobs.emplace_back("clusters.u32", [&] { return format::u32_rows(e.hierarchy.cluster_of, n); });
+  jobs.emplace_back("hierarchy.bin", [&] { return hierarchy_bytes(e.hierarchy); });
+  jobs.emplace_back("edges.bin", [&] { return format::edge_rows(e.edges); });
+  jobs.emplace_back("outrows.u64", [&] { return format::u64_column(e.out_rows); });
+  if (!e.encoding.betweenness.empty()) jobs.emplace_back("betweenness.f64", [&] { return format::f64_column(e.encoding.betweenness); });
+  // What an incremental epoch carries (R1-INC-038): the exact image numerators, five per particle.
+  if (e.spectrum.sums_shift >= 0) jobs.emplace_back("image.i128", [&] { return format::i128_column(e.spectrum.image); });
+  // The record stream's chunks (R1-EPO-017): SHA-256 then leaf, per chunk.
+  if (!e.record_chunks.leaves.empty())
+    jobs.emplace_back("records.chunks", [&] {
+      const std::span<const format::Bytes32> columns[] = {e.record_chunks.sha, e.record_chunks.leaves};
+      return format::bytes32_rows(columns, chunks);
+    });
+  std::vector<std::pair<std::string, std::string>> f(jobs.size());
+  tbb::parallel_for(std::size_t{0}, jobs.size(), [&](std::size_t i) { f[i] = {jobs[i].first, jobs[i].second()}; });
   f.emplace_back("anchor.bin", std::move(anchor_file));
   return f;
 }

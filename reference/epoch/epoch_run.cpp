@@ -178,10 +178,12 @@ Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const 
   // (R1-ENC-020, R1-HIER-070): how they run, never what they compute.
   EncodingOptions encoding_options = o.encoding;
   encoding_options.parallel = o.encoding.parallel || o.parallel;
-  // r_0 from the positions the frame stage just made (R1-ENC-007), the same on every backend.
+  // r_0 from the positions the frame stage just made (R1-ENC-007), the same on every backend,
+  // unless the caller kept an earlier epoch's (R1-INC-035).
   if (encoding_options.radius_scale == "spacing") {
-    encoding_options.r0_squared_raw =
-        radius_scale_from_layout(e.frame.position, e.focus.phi, encoding_options.parallel).r0_squared_raw;
+    if (!encoding_options.r0_squared_raw)
+      encoding_options.r0_squared_raw =
+          radius_scale_from_layout(e.frame.position, e.focus.phi, encoding_options.parallel).r0_squared_raw;
   } else if (encoding_options.radius_scale == "scene") {
     encoding_options.r0_squared_raw.reset();
   } else {

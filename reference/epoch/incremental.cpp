@@ -17,6 +17,7 @@
 #include "r1/reference/intern_index.hpp"
 #include "r1/solvers/exact_round.hpp"
 #include "r1/solvers/focus.hpp"
+#include "r1/solvers/panel.hpp"
 #include "r1/solvers/spectral.hpp"
 
 namespace r1 {
@@ -25,7 +26,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The earlier epoch's A_sym and A2 as rows (both directions of every layout edge).
+// The earlier epoch's A_sym and A2 as rows (both directions of every layout edge), and every
+// particle's weighted degree. With a set of wanted rows, only those rows hold entries.
 struct Rows {
   std::vector<std::uint64_t> ptr;
   std::vector<std::uint32_t> col;
@@ -33,13 +35,18 @@ struct Rows {
   std::vector<std::uint64_t> degree;
 };
 
-Rows prev_rows(const Epoch& prev) {
+// `wanted` (one flag per PREV particle) limits the rows that get entries; null: every row.
+Rows prev_rows(const Epoch& prev, const std::vector<char>* wanted = nullptr) {
   const std::size_t n = prev.ids.size();
   Rows r;
   r.ptr.assign(n + 1, 0);
+  r.degree.assign(n, 0);
+  const auto want = [&](std::uint32_t p) { return wanted == nullptr || (*wanted)[p] != 0; };
   for (const LayoutEdge& e : prev.edges) {
-    ++r.ptr[e.p + 1];
-    ++r.ptr[e.q + 1];
+    if (want(e.p)) ++r.ptr[e.p + 1];
+    if (want(e.q)) ++r.ptr[e.q + 1];
+    r.degree[e.p] += static_cast<std::uint64_t>(e.w_raw);
+    r.degree[e.q] += static_cast<std::uint64_t>(e.w_raw);
   }
   for (std::size_t i = 0; i < n; ++i) r.ptr[i + 1] += r.ptr[i];
   r.col.resize(r.ptr[n]);
@@ -49,17 +56,19 @@ Rows prev_rows(const Epoch& prev) {
   // Edges are sorted by (p, q): row p receives q ascending, row q receives p ascending, so every
   // row ends up sorted by column.
   for (const LayoutEdge& e : prev.edges) {
-    const std::uint64_t a = fill[e.p]++, b = fill[e.q]++;
-    r.col[a] = e.q;
-    r.w[a] = e.w_raw;
-    r.a2[a] = e.a2_raw;
-    r.col[b] = e.p;
-    r.w[b] = e.w_raw;
-    r.a2[b] = -e.a2_raw;
+    if (want(e.p)) {
+      const std::uint64_t a = fill[e.p]++;
+      r.col[a] = e.q;
+      r.w[a] = e.w_raw;
+      r.a2[a] = e.a2_raw;
+    }
+    if (want(e.q)) {
+      const std::uint64_t b = fill[e.q]++;
+      r.col[b] = e.p;
+      r.w[b] = e.w_raw;
+      r.a2[b] = -e.a2_raw;
+    }
   }
-  r.degree.assign(n, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::uint64_t k = r.ptr[i]; k < r.ptr[i + 1]; ++k) r.degree[i] += static_cast<std::uint64_t>(r.w[k]);
   return r;
 }
 
@@ -101,16 +110,18 @@ std::uint64_t mix64(std::uint64_t z) {
 std::vector<std::uint64_t> out_row_digests(const Graph& g, std::span<const ParticleId> ids) {
   std::vector<std::uint64_t> d(g.n, 0);
   // The ids are read in column order, cache misses on large graphs: the one 16 entries on is
-  // fetched early (speed only).
+  // fetched early (speed only). Rows are independent: blocks of them on the TBB workers.
   constexpr std::uint64_t kAhead = 16;
   const std::uint64_t last = g.out_ptr[g.n] == 0 ? 0 : g.out_ptr[g.n] - 1;
-  for (std::uint32_t p = 0; p < g.n; ++p)
-    for (std::uint64_t k = g.out_ptr[p]; k < g.out_ptr[p + 1]; ++k) {
-      __builtin_prefetch(ids.data() + g.out_col[std::min(k + kAhead, last)]);
-      std::uint64_t t = 0;
-      for (int b = 7; b >= 0; --b) t = (t << 8) | ids[g.out_col[k]][static_cast<std::size_t>(b)];
-      d[p] += mix64(t ^ mix64(static_cast<std::uint64_t>(g.out_w[k])));
-    }
+  spectral::for_row_blocks(g.n, true, [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t p = lo; p < hi; ++p)
+      for (std::uint64_t k = g.out_ptr[p]; k < g.out_ptr[p + 1]; ++k) {
+        __builtin_prefetch(ids.data() + g.out_col[std::min(k + kAhead, last)]);
+        std::uint64_t t = 0;
+        for (int b = 7; b >= 0; --b) t = (t << 8) | ids[g.out_col[k]][static_cast<std::size_t>(b)];
+        d[p] += mix64(t ^ mix64(static_cast<std::uint64_t>(g.out_w[k])));
+      }
+  });
   return d;
 }
 
@@ -120,7 +131,9 @@ std::vector<std::uint32_t> neighbourhood(const Graph& g, const std::vector<std::
 
 namespace {
 
-Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name, const Rows& pr) {
+// The edit batch (R1-INC-010..012), with PREV's rows in `pr` as far as the update reads them: every
+// degree, and the entries of the rows of N_1 (all rows when a particle left).
+Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name, Rows& pr) {
   const std::size_t np = prev.ids.size(), n = next.particles.size();
   if (prev.out_rows.size() != np)
     return Status::input(prev_name + ": " + std::to_string(prev.out_rows.size()) + " out-row digests for " + std::to_string(np) +
@@ -147,6 +160,59 @@ Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph&
     }
   }
 
+  // When no particle left and every one kept its number (particles may be added after them), a
+  // row differs exactly when a layout edge at it does, and the edges are compared as two sorted
+  // lists of pairs (p < q): NEXT's upper triangle row by row against PREV's edges.bin. PREV's rows
+  // are then needed only for N_1 (below), not for every particle (416 MB at 10^7 links).
+  bool same_numbers = b.dropped == 0;
+  for (std::size_t p = 0; same_numbers && p < np; ++p) same_numbers = next_of[p] == static_cast<std::int64_t>(p);
+  const std::vector<std::uint64_t> out_rows = out_row_digests(g, next.particles);
+  const std::size_t blocks = (n + spectral::kBlock - 1) / spectral::kBlock;
+  std::vector<std::vector<std::uint32_t>> touched_in(blocks);
+  if (same_numbers) {
+    // Where each PREV row's edges begin (PREV's edges are sorted by (p, q)).
+    std::vector<std::uint64_t> first(np + 1, 0);
+    for (const LayoutEdge& e : prev.edges) ++first[e.p + 1];
+    for (std::size_t p = 0; p < np; ++p) first[p + 1] += first[p];
+    // Each block lists its rows whose digest differs or that are new, and the far end of every
+    // pair that differs; the lists join in block order, then sorted and made unique.
+    spectral::for_row_blocks(n, true, [&](std::size_t lo, std::size_t hi) {
+      std::vector<std::uint32_t>& t = touched_in[lo / spectral::kBlock];
+      for (std::size_t i = lo; i < hi; ++i) {
+        const bool old = i < np;
+        bool row_differs = !old || out_rows[i] != prev.out_rows[i];
+        std::uint64_t k = std::upper_bound(g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i]),
+                                           g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i + 1]), static_cast<std::uint32_t>(i)) -
+                          g.col.begin();
+        std::uint64_t e = old ? first[i] : 0;
+        const std::uint64_t k_end = g.row_ptr[i + 1], e_end = old ? first[i + 1] : 0;
+        while (k < k_end || e < e_end) {
+          std::uint32_t far;
+          if (e == e_end || (k < k_end && g.col[k] < prev.edges[e].q)) {
+            far = g.col[k++];
+          } else if (k == k_end || prev.edges[e].q < g.col[k]) {
+            far = prev.edges[e++].q;
+          } else {
+            const bool same = g.w[k] == prev.edges[e].w_raw && g.a2[k] == prev.edges[e].a2_raw;
+            far = g.col[k];
+            ++k;
+            ++e;
+            if (same) continue;
+          }
+          row_differs = true;
+          t.push_back(far);
+        }
+        if (row_differs) t.push_back(static_cast<std::uint32_t>(i));
+      }
+    });
+    for (auto& t : touched_in) {
+      b.touched.insert(b.touched.end(), t.begin(), t.end());
+      std::vector<std::uint32_t>().swap(t);
+    }
+    std::sort(b.touched.begin(), b.touched.end());
+    b.touched.erase(std::unique(b.touched.begin(), b.touched.end()), b.touched.end());
+  }
+
   // Row i's entries keyed by next column: the next graph's, and the earlier one's mapped; the M
   // entries only where the norm bound needs them (`with_m`; 0 otherwise).
   auto next_row = [&](std::uint32_t i, std::vector<Entry>& out, bool with_m) {
@@ -165,28 +231,43 @@ Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph&
       std::sort(out.begin(), out.end(), [](const Entry& x, const Entry& y) { return x.key < y.key; });
   };
 
-  // The directed rows (A0, which the focus reads) compare by digest: a link that only changes
-  // direction leaves A_sym and A2 as they were.
-  const std::vector<std::uint64_t> out_rows = out_row_digests(g, next.particles);
-  std::vector<Entry> a, c;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (b.prev_of[i] < 0) {
-      ++b.added;
-      b.touched.push_back(i);
-      continue;
-    }
-    next_row(i, a, false);
-    prev_row(static_cast<std::size_t>(b.prev_of[i]), c, false);
-    bool same = a.size() == c.size() && out_rows[i] == prev.out_rows[static_cast<std::size_t>(b.prev_of[i])];
-    for (std::size_t k = 0; same && k < a.size(); ++k) same = a[k].key == c[k].key && a[k].w == c[k].w && a[k].a2 == c[k].a2;
-    if (!same) b.touched.push_back(i);
+  if (!same_numbers) {
+    // The general case: every row of NEXT against PREV's row of the same particle, columns
+    // mapped. The directed rows (A0, which the focus reads) compare by digest: a link that only
+    // changes direction leaves A_sym and A2 as they were. Rows compare independently: each block
+    // of rows lists its touched rows, and the lists join in block order.
+    pr = prev_rows(prev);
+    spectral::for_row_blocks(n, true, [&](std::size_t lo, std::size_t hi) {
+      std::vector<Entry> a, c;
+      std::vector<std::uint32_t>& t = touched_in[lo / spectral::kBlock];
+      for (std::size_t i = lo; i < hi; ++i) {
+        if (b.prev_of[i] < 0) {
+          t.push_back(static_cast<std::uint32_t>(i));
+          continue;
+        }
+        next_row(static_cast<std::uint32_t>(i), a, false);
+        prev_row(static_cast<std::size_t>(b.prev_of[i]), c, false);
+        bool same = a.size() == c.size() && out_rows[i] == prev.out_rows[static_cast<std::size_t>(b.prev_of[i])];
+        for (std::size_t k = 0; same && k < a.size(); ++k) same = a[k].key == c[k].key && a[k].w == c[k].w && a[k].a2 == c[k].a2;
+        if (!same) t.push_back(static_cast<std::uint32_t>(i));
+      }
+    });
+    for (const auto& t : touched_in) b.touched.insert(b.touched.end(), t.begin(), t.end());
   }
+  for (std::size_t i = 0; i < n; ++i) b.added += b.prev_of[i] < 0 ? 1 : 0;
+  std::vector<Entry> a, c;
 
   // ||Delta M||_F over every changed entry (R1-INC-012): each lies in a row of N_1 = touched and
   // their neighbours, or in a row of a particle that left. Entries in fp64 (relative error
   // ~1e-16, covered by the margin); the rounding of each Q32 entry to its raw (2^-33 on either
   // side) adds 2^-32 per changed entry.
   std::vector<std::uint32_t> n1 = neighbourhood(g, b.touched, 1);
+  if (same_numbers) {
+    std::vector<char> wanted(np, 0);
+    for (const std::uint32_t i : n1)
+      if (i < np) wanted[i] = 1;
+    pr = prev_rows(prev, &wanted);
+  }
   double sum = 0, max_row = 0;  // ||Delta M||_F^2 and ||Delta M||_inf (max absolute row sum)
   std::uint64_t changed = 0;
   for (std::uint32_t i : n1) {
@@ -235,7 +316,8 @@ Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph&
 }  // namespace
 
 Result<EditBatch> edit_batch(const Epoch& prev, const Snapshot& next, const Graph& g, const std::string& prev_name) {
-  return batch_of(prev, next, g, prev_name, prev_rows(prev));
+  Rows pr;
+  return batch_of(prev, next, g, prev_name, pr);
 }
 
 namespace {
@@ -511,11 +593,11 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
                              const Snapshot& next, const Graph& g, const EpochOptions& options,
                              const UpdateOptions& uo, EpochStages& stages, const ProgressFn& progress) {
   const auto batch_start = std::chrono::steady_clock::now();
-  Rows pr = prev_rows(prev);
-  // PREV's layout edges live on as these rows; the list itself (24 bytes an edge, 240 MB at 10^7
-  // links) is not read again (R1-EPO-005).
-  std::vector<LayoutEdge>().swap(prev.edges);
+  Rows pr;
   R1_ASSIGN(EditBatch batch, batch_of(prev, next, g, prev_name, pr));
+  // PREV's layout edges live on as the rows the update reads (`pr`); the list itself (24 bytes an
+  // edge, 240 MB at 10^7 links) is not read again (R1-EPO-005).
+  std::vector<LayoutEdge>().swap(prev.edges);
   const std::size_t n = g.n;
 
   UpdateInfo info;
@@ -868,6 +950,13 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
   if (!tail_options.hierarchy.radius0_raw) {
     tail_options.hierarchy.radius0_raw = prev.hierarchy.radius_raw[0];
     info.hierarchy_radius_kept = true;
+  }
+  // Likewise the encoding's r_0 (R1-ENC-007): PREV's, where both measure it from the spacing,
+  // instead of a nearest-neighbour query per particle over positions that moved only on N_h.
+  if (tail_options.encoding.radius_scale == "spacing" && !tail_options.encoding.r0_squared_raw &&
+      prev.encoding.radius_scale == "spacing") {
+    tail_options.encoding.r0_squared_raw = prev.encoding.r0_squared_raw;
+    info.radius_scale_kept = true;
   }
   R1_TRY(epoch_tail(e, next, g, tail_options, stages, progress));
   info.incremental = true;

@@ -15,6 +15,7 @@
 
 #include "r1/format/hierarchy.hpp"
 #include "r1/reference/edits.hpp"
+#include "r1/reference/encoding.hpp"
 #include "r1/reference/epoch.hpp"
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/frame.hpp"
@@ -162,17 +163,27 @@ TEST(Incremental, TouchedRowsAndTheNormBoundAgainstADenseOracle) {
   const r1::Epoch prev = full_epoch(s);
   const std::string a = s.names[s.links[0].from], b = s.names[s.links[0].to];
   const std::string c = s.names[s.links[7].from], d = s.names[s.links[7].to];
+  // Adds between far-apart particles (rows early and late in the order), and a new particle.
+  std::string adds;
+  for (std::size_t k = 0; k < 6; ++k)
+    adds += "add\t" + s.names[(37 * k + 5) % s.names.size()] + "\t" + s.names[(101 * k + 290) % s.names.size()] + "\t0.75\n";
   for (const std::string& batch :
-       {"reweight\t" + a + "\t" + b + "\t0.5\n", "reweight\t" + c + "\t" + d + "\t0.125\nadd\t" + a + "\t" + d + "\t0.25\n"}) {
+       {"reweight\t" + a + "\t" + b + "\t0.5\n", "reweight\t" + c + "\t" + d + "\t0.125\nadd\t" + a + "\t" + d + "\t0.25\n", adds,
+        adds + "add\t" + c + "\tnewcomer\t2\n"}) {
     const r1::Snapshot next = edited(s, batch);
     const r1::Graph g = graph(next);
     auto batch_r = r1::edit_batch(prev, next, g, "prev");
     ASSERT_TRUE(batch_r.is_ok()) << batch_r.status().message();
-    // Touched: exactly the rows that differ (the same particle order here: no particle moved).
-    ASSERT_EQ(next.particles, s.particles);
+    // Touched: exactly the rows that differ (the same particle order here: no particle moved;
+    // a new one comes last and is touched).
+    ASSERT_TRUE(std::equal(s.particles.begin(), s.particles.end(), next.particles.begin()));
     const r1::Graph g0 = graph(s);
     std::vector<std::uint32_t> want;
     for (std::uint32_t i = 0; i < g.n; ++i) {
+      if (i >= g0.n) {
+        want.push_back(i);
+        continue;
+      }
       const bool same = g.row_ptr[i + 1] - g.row_ptr[i] == g0.row_ptr[i + 1] - g0.row_ptr[i] &&
                         std::equal(g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i]),
                                    g.col.begin() + static_cast<std::ptrdiff_t>(g.row_ptr[i + 1]),
@@ -183,6 +194,8 @@ TEST(Incremental, TouchedRowsAndTheNormBoundAgainstADenseOracle) {
       if (!same) want.push_back(i);
     }
     EXPECT_EQ(batch_r->touched, want);
+    EXPECT_EQ(batch_r->added, g.n - g0.n);
+    if (g.n != g0.n) continue;  // the dense comparison below needs one size
     // The bound holds for the operators' true difference (rounded entries included) and for the
     // exact entries, and is not looser than the Frobenius norm plus the rounding allowance.
     const Eigen::MatrixXd dl = dense_operator(g) - dense_operator(g0);
@@ -401,6 +414,12 @@ TEST(Incremental, CertifiedUpdateBoundsTheExactEigenvectorsAndFreezesTheRest) {
   auto h = r1::build_hierarchy(r.epoch.frame.position, r.epoch.focus.phi, r.epoch.encoding.color, r.epoch.ids, at_prev);
   ASSERT_TRUE(h.is_ok()) << h.status().message();
   EXPECT_EQ(r1::hierarchy_bytes(*h), r1::hierarchy_bytes(r.epoch.hierarchy));
+  // The encoding's r_0 (R1-INC-035): PREV's, and every radius follows from it as in a full encoding.
+  EXPECT_TRUE(u.radius_scale_kept);
+  EXPECT_EQ(r.epoch.encoding.radius_scale, "spacing");
+  EXPECT_EQ(r.epoch.encoding.r0_squared_raw, r.prev.encoding.r0_squared_raw);
+  for (std::size_t p = 0; p < r.epoch.ids.size(); ++p)
+    ASSERT_EQ(r.epoch.encoding.radius[p].raw, r1::radius_of(r.epoch.focus.phi[p], r1::Q32::one(), r.prev.encoding.r0_squared_raw).raw) << p;
   // The same inputs, the same bytes.
   const UpdateRun again = incremental_run(small_reweight, uo);
   EXPECT_EQ(*r1::epoch_files(again.epoch), *r1::epoch_files(r.epoch));
@@ -417,6 +436,9 @@ TEST(Incremental, FullSolveWhenTheCertificateFailsOrTheCadenceSaysSo) {
   EXPECT_EQ(big.epoch.update->epochs_since_full, 0u);
   EXPECT_EQ(big.epoch.update->full_eigenvalues, big.epoch.spectrum.eigenvalues);
   EXPECT_FALSE(big.epoch.update->hierarchy_radius_kept);  // a full solve searches r_0 (R1-INC-035)
+  EXPECT_FALSE(big.epoch.update->radius_scale_kept);      // and measures the encoding's r_0 again
+  EXPECT_EQ(big.epoch.encoding.r0_squared_raw,
+            r1::radius_scale_from_layout(big.epoch.frame.position, big.epoch.focus.phi).r0_squared_raw);
   // The full solve is the epoch aligned to the earlier anchor, byte for byte.
   r1::EpochOptions o;
   o.anchor = r1::make_anchor(big.s, big.prev.frame);

@@ -191,6 +191,7 @@ struct UpdateInfo {
   bool certified = false;            // incremental with certificate <= eps_x (false: kept by --keep-local)
   bool betweenness_carried = false;  // roles from the earlier epoch's betweenness (R1-INC-037)
   bool hierarchy_radius_kept = false;  // the hierarchy built at the earlier epoch's r_0, no search (R1-INC-035)
+  bool radius_scale_kept = false;      // the encoding's r_0 the earlier epoch's, not measured again (R1-INC-035)
   double delta_norm = 0;             // bound on ||L~_next - L~_prev||_2 of this batch
   double delta_norm_since_full = 0;  // the bound summed since the last full solve
   std::array<double, 6> full_eigenvalues{}, full_residuals{};  // of the last full solve

@@ -41,7 +41,8 @@ struct EncodingOptions {
   bool parallel = false;          // TBB for betweenness and the per-particle loops: bit-identical results (R1-ENC-020)
   // How r_0 is chosen (R1-ENC-007..008): "spacing" (from the layout, the default) or "scene"
   // (r_0 = R_scene, as before). The epoch fills r0_squared_raw from the frame's positions before
-  // the stage runs; the stage itself uses r0_squared_raw, else R_scene^2.
+  // the stage runs, unless it arrives set with "spacing" (an incremental epoch keeps the earlier
+  // epoch's, R1-INC-035); the stage itself uses r0_squared_raw, else R_scene^2.
   std::string radius_scale = "spacing";
   std::optional<std::int64_t> r0_squared_raw;  // r_0^2 as a Q32 raw, > 0
 };
