@@ -205,12 +205,6 @@ Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph&
         if (row_differs) t.push_back(static_cast<std::uint32_t>(i));
       }
     });
-    for (auto& t : touched_in) {
-      b.touched.insert(b.touched.end(), t.begin(), t.end());
-      std::vector<std::uint32_t>().swap(t);
-    }
-    std::sort(b.touched.begin(), b.touched.end());
-    b.touched.erase(std::unique(b.touched.begin(), b.touched.end()), b.touched.end());
   }
 
   // Row i's entries keyed by next column: the next graph's, and the earlier one's mapped; the M
@@ -252,8 +246,11 @@ Result<EditBatch> batch_of(const Epoch& prev, const Snapshot& next, const Graph&
         if (!same) t.push_back(static_cast<std::uint32_t>(i));
       }
     });
-    for (const auto& t : touched_in) b.touched.insert(b.touched.end(), t.begin(), t.end());
   }
+  // The blocks' lists in block order; the pair merge lists far ends out of order and twice.
+  for (const auto& t : touched_in) b.touched.insert(b.touched.end(), t.begin(), t.end());
+  std::sort(b.touched.begin(), b.touched.end());
+  b.touched.erase(std::unique(b.touched.begin(), b.touched.end()), b.touched.end());
   for (std::size_t i = 0; i < n; ++i) b.added += b.prev_of[i] < 0 ? 1 : 0;
   std::vector<Entry> a, c;
 

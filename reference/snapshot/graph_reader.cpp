@@ -72,18 +72,8 @@ struct RangeContext {
   const SnapshotConfig& config;
 };
 
-// Numbers of a part of the records that is not the first: its own tables, by first appearance.
-struct LocalNumbering {
-  std::vector<ParticleId> particles;
-  std::vector<NeuronId> neurons;
-  IdIndex particle_index, neuron_index;
-  std::uint32_t particle_by_id(const ParticleId& id) { return particle_index.intern(id, particles); }
-  std::uint32_t neuron_by_id(const NeuronId& id) { return neuron_index.intern(id, neurons); }
-  void prefetch_particle(const ParticleId& id) const { particle_index.prefetch_slot(id); }
-};
-
 // Decodes and checks records [first, last) into out[first, last), numbering ids with `numbering` (the
-// snapshot's builder or a LocalNumbering); `last_height` is the height of the record before
+// snapshot's builder, or for the second half a builder of its own); `last_height` is the height of the record before
 // `first` (0 for the first record). Returns the first bad record's error.
 template <class Numbering, class Tick>
 Status parse_records(const RangeContext& ctx, std::size_t first, std::size_t last, std::uint64_t last_height,
@@ -178,18 +168,20 @@ Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file
   } else {
     // The second half's order check starts from the height of the record before it.
     const std::uint64_t before = get_le<std::uint64_t>(base + (half - 1) * kRecordBytes + 117, 8);
-    LocalNumbering local;
+    SnapshotBuilder second(file);  // its own first-appearance tables
     tbb::parallel_invoke(parse_first,
-                         [&] { second_status = parse_records(ctx, half, n, before, local, s.links.data(), [](std::size_t) {}); });
+                         [&] { second_status = parse_records(ctx, half, n, before, second, s.links.data(), [](std::size_t) {}); });
     R1_TRY(first_status);
     R1_TRY(second_status);
     // The second half's particles and neurons in its order of first appearance, numbered after the
     // first half's (those it already holds keep their numbers), then its links renumbered.
-    std::vector<std::uint32_t> particle(local.particles.size()), neuron(local.neurons.size());
-    for (std::size_t j = 0; j < local.neurons.size(); ++j) neuron[j] = b.neuron_by_id(local.neurons[j]);
-    for (std::size_t j = 0; j < local.particles.size(); ++j) {
-      if (j + 16 < local.particles.size()) b.prefetch_particle(local.particles[j + 16]);
-      particle[j] = b.particle_by_id(local.particles[j]);
+    const std::vector<ParticleId>& local_particles = second.snapshot().particles;
+    const std::vector<NeuronId>& local_neurons = second.snapshot().neurons;
+    std::vector<std::uint32_t> particle(local_particles.size()), neuron(local_neurons.size());
+    for (std::size_t j = 0; j < local_neurons.size(); ++j) neuron[j] = b.neuron_by_id(local_neurons[j]);
+    for (std::size_t j = 0; j < local_particles.size(); ++j) {
+      if (j + 16 < local_particles.size()) b.prefetch_particle(local_particles[j + 16]);
+      particle[j] = b.particle_by_id(local_particles[j]);
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(half, n, std::size_t{1} << 16), [&](const auto& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
