@@ -17,6 +17,7 @@
 #include "r1/reference/epoch_io.hpp"
 #include "r1/reference/frame.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "r1/reference/graph_park.hpp"
 #include "r1/reference/incremental.hpp"
 #include "r1/reference/input_file.hpp"
 #include "render/content.hpp"
@@ -179,8 +180,25 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   if (!c.content.empty()) {
     R1_ASSIGN(content, render::read_content_side_file(c.content, s.particles));
   }
-  R1_ASSIGN(const Graph g, build_graph(s, progress.sink()));
-  const double read_s = seconds_since(t0);
+  // The snapshot's digest and its record chunks before the stages, with PREV's chunk leaves where
+  // the chunks are PREV's (R1-EPO-017); then the link records go: nothing after the digest and
+  // the layout graph reads them, and the stages' peak is what they would add to (R1-EPO-005).
+  // Without PREV the digest comes first and the graph's build lets the records go as soon as it
+  // holds them, the load's peak.
+  RecordChunks chunks;
+  const auto digest = [&](const RecordChunks* previous) {
+    const auto td = std::chrono::steady_clock::now();
+    o.snapshot_digest = snapshot_digest(s, chunks, previous);
+    o.snapshot_digest_seconds = seconds_since(td);
+  };
+  Graph g;
+  if (c.from.empty()) {
+    digest(nullptr);
+    R1_ASSIGN(g, build_graph_releasing_links(s, progress.sink()));
+  } else {
+    R1_ASSIGN(g, build_graph(s, progress.sink()));
+  }
+  const double read_s = seconds_since(t0) - o.snapshot_digest_seconds;  // the digest has a lap of its own
   Epoch e;
   double previous_s = 0;
   // What a local update of the neural field needs of the earlier epoch (R1-NRF-050): its field,
@@ -188,18 +206,14 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   std::optional<render::NeuralField> prev_field;
   std::vector<hemera::Digest> prev_ids;
   render::Scene prev_scene;
-  // The snapshot's digest and its record chunks before the stages, with PREV's chunk leaves where
-  // the chunks are PREV's (R1-EPO-017); then the link records go: nothing after the digest and
-  // the layout graph reads them, and the stages' peak is what they would add to (R1-EPO-005).
-  RecordChunks chunks;
-  const auto digest_and_drop_links = [&](const RecordChunks* previous) {
-    const auto td = std::chrono::steady_clock::now();
-    o.snapshot_digest = snapshot_digest(s, chunks, previous);
-    o.snapshot_digest_seconds = seconds_since(td);
-    std::vector<Link>().swap(s.links);
-  };
   if (c.from.empty()) {
-    digest_and_drop_links(nullptr);
+    // R1-EPO-006: while the spectral stage solves, the graph's arrays it does not read wait
+    // compressed. A failure to park leaves them in place (the epoch only needs more memory).
+    ParkedGraph parked;
+    o.spectral_operator_ready = [&] {
+      if (auto p = ParkedGraph::park(g, true)) parked = std::move(*p);
+    };
+    o.spectral_done = [&] { return parked.restore(g, true); };
     R1_ASSIGN(e, backends::run_epoch(*chosen.backend, s, g, o, progress.sink()));
   } else {
     // The earlier epoch and its anchor: the chain's frame (R1-INC-001, R1-INC-034). `previous`
@@ -208,7 +222,8 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     R1_ASSIGN(Epoch prev, prev_read.get());
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
-    digest_and_drop_links(&prev.record_chunks);
+    digest(&prev.record_chunks);
+    std::vector<Link>().swap(s.links);
     const std::string prev_nrf = (std::filesystem::path(c.from) / "field.nrf").string();
     if (c.field && std::filesystem::exists(prev_nrf)) {
       R1_ASSIGN(const auto in, InputFile::open(prev_nrf));
@@ -220,6 +235,11 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     uo.force_full = c.full;
     R1_ASSIGN(e, run_epoch_from(std::move(prev), anchor, c.from, s, g, o, uo, *chosen.backend, progress.sink()));
   }
+  // Nothing after the stages reads the layout graph or the snapshot: they go before the field's
+  // training and the writing, whose serialised files would otherwise be the epoch's peak
+  // (R1-EPO-005).
+  g = Graph{};
+  s = Snapshot{};
   e.record_chunks = std::move(chunks);
   e.timings.insert(e.timings.begin(), {"read", read_s});
   // Reading and checking the earlier epoch (every file against its digest) is part of the update.

@@ -13,6 +13,8 @@ endif()
 find_package(nlohmann_json 3 REQUIRED)
 # SHA-256 of the snapshot's record chunks (R1-EPO-017): OpenSSL's libcrypto.
 find_package(OpenSSL 3 REQUIRED COMPONENTS Crypto)
+# The layout graph's arrays held compressed during the spectral solve (R1-EPO-006): zstd.
+find_package(zstd 1.4 REQUIRED CONFIG)
 if(R1_BUILD_TESTS)
   find_package(GTest REQUIRED)
   find_package(rapidcheck REQUIRED)

@@ -7,7 +7,8 @@ set -euo pipefail
 #   build: compiler, CMake, Ninja, ccache; clang-14 + its runtime for libFuzzer and the sanitizer build
 #   numerics: Boost.Multiprecision (references in property tests), Eigen + Spectra (eigensolvers)
 #   input/CLI: toml++, CLI11, nlohmann-json; TBB for the parallel paths; OpenSSL's libcrypto for
-#     the SHA-256 of snapshot record chunks (an incremental epoch's digest, R1-EPO-017)
+#     the SHA-256 of snapshot record chunks (an incremental epoch's digest, R1-EPO-017); zstd for
+#     the layout graph's arrays parked during the spectral solve (R1-EPO-006)
 #   images: OpenImageIO (+ the tools and OpenCV core its CMake config asks for), OpenColorIO,
 #     DejaVu fonts for the T1 labels OpenImageIO draws
 #   tests/bench: GoogleTest/GoogleMock, RapidCheck, Google Benchmark, SciPy for peer comparisons
@@ -19,7 +20,7 @@ PACKAGES=(
   g++ cmake ninja-build make pkg-config ccache
   clang-14 libclang-rt-14-dev lld
   libboost-dev libeigen3-dev libspectra-dev
-  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libtbb-dev libssl-dev
+  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libtbb-dev libssl-dev libzstd-dev
   libopenimageio-dev openimageio-tools libopencv-core-dev libopencolorio-dev fonts-dejavu-core
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
   python3 python3-numpy python3-scipy

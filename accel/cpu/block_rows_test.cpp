@@ -79,6 +79,69 @@ TEST(CpuBlockRows, TheIfmaRowsGiveTheOperatorsRowsBitForBit) {
   }
 }
 
+// Line-wide blocks (R1-SPEC-074) read in place, and the filter's fused step (R1-SPEC-075):
+// the bits of the solver's own rows followed by the portable recurrence, the entries past the
+// block's columns left zero, with and without the rank-one term, with gamma = 0 (p not read).
+TEST(CpuBlockRows, LineWideBlocksAndTheFusedFilterStepGiveTheSolversBits) {
+  if (detect_simd() != Simd::kAvx512Ifma) GTEST_SKIP() << "this CPU has no AVX-512 IFMA; below it the solver's rows run";
+  for (const auto& [spokes, apart] : {std::pair{4500, true}, std::pair{40000, false}}) {
+    const Graph g = hub_graph(spokes, apart);
+    auto op = spectral_operator_q32(g, SpectralParams{});
+    ASSERT_TRUE(op.is_ok()) << op.status().message();
+    const std::size_t n = g.n, ld = 8;
+    for (const bool parallel : {false, true})
+      for (const std::size_t count : {std::size_t{5}, std::size_t{7}})
+        for (const double gamma : {0.0, -0.4375}) {
+          SCOPED_TRACE("spokes " + std::to_string(spokes) + " parallel " + std::to_string(parallel) + " count " +
+                       std::to_string(count) + " gamma " + std::to_string(gamma));
+          // x and p with rows of 8 entries on 64-byte lines, zero past count.
+          std::vector<fx::Q32> xs(n * ld + 8), ps(n * ld + 8);
+          const auto line = [](std::vector<fx::Q32>& v) {
+            const auto mis = reinterpret_cast<std::uintptr_t>(v.data()) % 64;
+            return v.data() + (mis == 0 ? 0 : (64 - mis) / sizeof(fx::Q32));
+          };
+          fx::Q32* x = line(xs);
+          fx::Q32* p = line(ps);
+          const std::vector<fx::Q32> xv = block(n, count, 49, false, 0xf11 + count);
+          const std::vector<fx::Q32> pv = block(n, count, 48, false, 0xf12 + count);
+          for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t c = 0; c < count; ++c) {
+              x[i * ld + c] = xv[i * count + c];
+              p[i * ld + c] = pv[i * count + c];
+            }
+          // The solver's own rows on the compact block, then the portable recurrence.
+          op->rows = nullptr;
+          std::vector<fx::Q32> want_y(n * count), want_p(pv);
+          op->apply_block(xv.data(), count, want_y.data(), count, count, false);
+          spectral::three_term(n * count, want_y.data(), xv.data(), want_p.data(), 0.8125, -1.0625, gamma, false);
+          op->rows = rows_factory(Simd::kAvx512Ifma, parallel, 0)(*op);  // fused at every size
+          ASSERT_TRUE(op->rows != nullptr);
+          // Strided: y rows 8 apart, the entries past count untouched.
+          std::vector<fx::Q32> ys(n * ld + 8, fx::Q32::from_raw(77));
+          fx::Q32* y = line(ys);
+          op->apply_block(x, ld, y, ld, count, parallel);
+          for (std::size_t i = 0; i < n; ++i) {
+            for (std::size_t c = 0; c < count; ++c) ASSERT_EQ(y[i * ld + c].raw, want_y[i * count + c].raw) << "row " << i;
+            for (std::size_t c = count; c < ld; ++c) ASSERT_EQ(y[i * ld + c].raw, 77) << "row " << i;
+          }
+          // Fused.
+          ASSERT_TRUE(op->apply_three_term(x, ld, p, count, 0.8125, -1.0625, gamma, parallel));
+          for (std::size_t i = 0; i < n; ++i) {
+            for (std::size_t c = 0; c < count; ++c) ASSERT_EQ(p[i * ld + c].raw, want_p[i * count + c].raw) << "row " << i;
+            for (std::size_t c = count; c < ld; ++c) ASSERT_EQ(p[i * ld + c].raw, 0) << "row " << i;
+          }
+          // A block not on line-wide rows is declined, with nothing written.
+          std::vector<fx::Q32> before(ps);
+          EXPECT_FALSE(op->apply_three_term(xv.data(), count, ps.data(), count, 0.8125, -1.0625, gamma, parallel));
+          EXPECT_EQ(ps, before);
+          // Below the default size the rows leave the step to the solver.
+          op->rows = rows_factory(Simd::kAvx512Ifma, parallel)(*op);
+          EXPECT_FALSE(op->apply_three_term(x, ld, p, count, 0.8125, -1.0625, gamma, parallel));
+          EXPECT_EQ(ps, before);
+        }
+  }
+}
+
 TEST(CpuBlockRows, BelowIfmaTheSolversOwnRowsRun) {
   EXPECT_FALSE(static_cast<bool>(rows_factory(Simd::kPortable, true)));
   EXPECT_FALSE(static_cast<bool>(rows_factory(Simd::kAvx2, true)));

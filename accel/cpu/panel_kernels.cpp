@@ -713,6 +713,13 @@ void CpuPanelOps::combine(Panel<fx::Q32>& p, Cols outs, Cols bases, Cols terms, 
 void CpuPanelOps::three_term(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta,
                              double gamma) const {
   if (level_ != Simd::kAvx512Ifma) return PanelOps<fx::Q32>::three_term(len, s, y, p, alpha, beta, gamma);
+  three_term_ifma(len, s, y, p, alpha, beta, gamma, parallel());
+}
+
+}  // namespace
+
+void three_term_ifma(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta,
+                     double gamma, bool parallel) {
   ThreeTermPlan plan;
   plan.nt = gamma == 0 ? 2 : 3;  // gamma = 0: p is not read, as in the portable kernel
   const double coef[3] = {alpha, beta, gamma};
@@ -727,7 +734,7 @@ void CpuPanelOps::three_term(std::size_t len, const fx::Q32* s, const fx::Q32* y
   plan.k_lo = static_cast<std::uint64_t>(k);
   plan.k_hi = static_cast<std::uint64_t>(k >> 64);
   // Row blocks split at multiples of 8, so groups of 8 entries never straddle two tasks.
-  spectral::for_row_blocks(len, parallel(), [&](std::size_t lo, std::size_t hi) {
+  spectral::for_row_blocks(len, parallel, [&](std::size_t lo, std::size_t hi) {
     for (std::size_t k0 = lo; k0 < hi; k0 += 8) {
       const std::size_t count = std::min<std::size_t>(8, hi - k0);
       if (!ifma_three_term8(plan, &s[k0].raw, &y[k0].raw, &p[k0].raw, tail_mask(count)))
@@ -735,8 +742,6 @@ void CpuPanelOps::three_term(std::size_t len, const fx::Q32* s, const fx::Q32* y
     }
   });
 }
-
-}  // namespace
 
 std::unique_ptr<PanelOps<fx::Q32>> make_panel_kernels(std::size_t n, int e, bool parallel, int frac, Simd level) {
   if (static_cast<int>(level) > static_cast<int>(detect_simd()))

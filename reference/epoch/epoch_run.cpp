@@ -59,6 +59,7 @@ Result<Spectrum<Q32>> reference_spectral_stage(const Graph& graph, const EpochOp
   so.parallel = o.parallel;
   so.q32_kernels = kernels.panel;
   so.q32_rows = kernels.rows;
+  so.operator_ready = o.spectral_operator_ready;
   if (o.domain == NumericDomain::kQ32) return spectral_embedding_q32(graph, o.spectral, progress, so);
   R1_ASSIGN(const Spectrum<double> s, spectral_embedding_f64(graph, o.spectral, progress, so));
   return to_q32(s);
@@ -146,6 +147,14 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
     e.snapshot_digest = snapshot_digest(snapshot, e.record_chunks, previous);
     clock.lap("digest");
   }
+  e.links = graph.links;
+  e.components = graph.component_size.size();
+  e.trikernel = o.trikernel;
+  e.spectral_params = o.spectral;
+  return e;
+}
+
+void epoch_particles(Epoch& e, const Snapshot& snapshot, const Graph& graph) {
   e.ids = snapshot.particles;
   e.titles.resize(snapshot.particles.size());
   for (std::size_t i = 0; i < e.titles.size(); ++i) {
@@ -156,23 +165,11 @@ Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOpti
       e.titles[i] = snapshot.names[i];
     }
   }
-  e.links = graph.links;
-  e.components = graph.component_size.size();
   e.out_rows = out_row_digests(graph, snapshot.particles);  // what the next epoch of the chain compares
-  e.trikernel = o.trikernel;
-  e.spectral_params = o.spectral;
-  return e;
 }
 
 Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const EpochOptions& o, EpochStages& st,
                   const ProgressFn& progress) {
-  // The pairs the renderer draws: the upper triangle of A_sym, rows ascending, columns ascending.
-  // Formed here, after the spectral stage, whose basis is the epoch's peak of memory (R1-EPO-005).
-  e.edges.clear();
-  e.edges.reserve((graph.col.size() + graph.n) / 2);
-  for (std::uint32_t i = 0; i < graph.n; ++i)
-    for (std::uint64_t k = graph.row_ptr[i]; k < graph.row_ptr[i + 1]; ++k)
-      if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
   Stopwatch clock(e.timings);
   // EpochOptions::parallel reaches the encoding and hierarchy stages through their own options
   // (R1-ENC-020, R1-HIER-070): how they run, never what they compute.
@@ -197,6 +194,14 @@ Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const 
   R1_ASSIGN(e.hierarchy,
             st.hierarchy(e.frame.position, e.focus.phi, e.encoding.color, e.ids, hierarchy_options, progress));
   clock.lap(stage_name(Stage::kHierarchy));
+  // The pairs the renderer draws: the upper triangle of A_sym, rows ascending, columns ascending.
+  // Formed last, after every stage, so that they are not alive beside the spectral stage's basis
+  // or the encoding's and hierarchy's work (R1-EPO-005).
+  e.edges.clear();
+  e.edges.reserve((graph.col.size() + graph.n) / 2);
+  for (std::uint32_t i = 0; i < graph.n; ++i)
+    for (std::uint64_t k = graph.row_ptr[i]; k < graph.row_ptr[i + 1]; ++k)
+      if (graph.col[k] > i) e.edges.push_back({i, graph.col[k], graph.w[k], graph.a2[k]});
   // A stage from elsewhere must hand back data of the epoch's shape (R1-BKD-011).
   const std::size_t n = e.ids.size();
   if (e.focus.phi.size() != n || e.frame.position.size() != n || e.encoding.color.size() != n ||
@@ -209,8 +214,14 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
                         const ProgressFn& progress) {
   Epoch e = epoch_header(snapshot, graph, o);
   Stopwatch clock(e.timings);
-  R1_ASSIGN(e.spectrum, st.spectral(graph, o, progress));
+  {
+    Result<Spectrum<Q32>> spectrum = st.spectral(graph, o, progress);
+    if (o.spectral_done) R1_TRY(o.spectral_done());  // R1-EPO-006: the graph is whole again
+    R1_ASSIGN(e.spectrum, std::move(spectrum));
+  }
   clock.lap(stage_name(Stage::kSpectral));
+  // The per-particle tables after the solve, the epoch's peak of memory (R1-EPO-006).
+  epoch_particles(e, snapshot, graph);
 
   // R1-EPO-002: lambda_2 for T(eps); 0 for a disconnected graph.
   const double lambda2 = e.components == 1 && e.spectrum.found >= 1 ? e.spectrum.eigenvalues[1] : 0.0;

@@ -848,6 +848,7 @@ Result<Epoch> run_epoch_from(Epoch prev, const Anchor& prev_anchor, const std::s
   // The digest: after the decision, which a full solve repeats; PREV's chunk leaves where the
   // record stream's chunks are PREV's (R1-EPO-017).
   Epoch e = epoch_header(next, g, options, &prev.record_chunks);
+  epoch_particles(e, next, g);
   Spectrum<Q32>& s = e.spectrum;
   s.n = static_cast<std::uint32_t>(n);
   s.rho = 0;

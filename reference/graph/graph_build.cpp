@@ -92,7 +92,11 @@ std::int64_t scale_to_q32(u128 value, u128 scale) {
   return static_cast<std::int64_t>(q);
 }
 
-Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool parallel) {
+namespace {
+
+// `release`: the snapshot's link records, released once the directed rows hold them (nothing
+// after reads them), or null to keep them.
+Result<Graph> build(const Snapshot& s, const ProgressFn& progress, bool parallel, std::vector<Link>* release) {
   Graph g;
   g.n = static_cast<std::uint32_t>(s.particles.size());
   g.links = s.links.size();
@@ -133,6 +137,7 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
       if ((k & 0xFFFFF) == 0) report(progress, "building graph", k, s.links.size());
     }
   }
+  if (release != nullptr) std::vector<Link>().swap(*release);  // s.links is not read below
   R1_TRY(compress_rows(out_ptr, out, s.source));
 
   // A_sym: every directed (i, j, w, a2) appears as (i, j, w, a2) and (j, i, w, -a2). Its entries
@@ -281,6 +286,16 @@ Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool pa
     ++g.component_size[g.component[i]];
   }
   return g;
+}
+
+}  // namespace
+
+Result<Graph> build_graph(const Snapshot& s, const ProgressFn& progress, bool parallel) {
+  return build(s, progress, parallel, nullptr);
+}
+
+Result<Graph> build_graph_releasing_links(Snapshot& s, const ProgressFn& progress, bool parallel) {
+  return build(s, progress, parallel, &s.links);
 }
 
 }  // namespace r1

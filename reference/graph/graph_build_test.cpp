@@ -12,6 +12,7 @@
 #include <random>
 
 #include "r1/reference/snapshot_builder.hpp"
+#include "graph_compare.hpp"
 
 namespace {
 
@@ -248,17 +249,14 @@ TEST(GraphBuild, ParallelRowsGiveTheSerialGraphAndTheExactSums) {
   ASSERT_TRUE(serial.is_ok()) << serial.status().message();
   ASSERT_TRUE(parallel->is_ok()) << parallel->status().message();
   const r1::Graph& g = *serial;
-  const r1::Graph& p = **parallel;
-  EXPECT_EQ(p.row_ptr, g.row_ptr);
-  EXPECT_EQ(p.col, g.col);
-  EXPECT_EQ(p.w, g.w);
-  EXPECT_EQ(p.a2, g.a2);
-  EXPECT_EQ(p.out_ptr, g.out_ptr);
-  EXPECT_EQ(p.out_col, g.out_col);
-  EXPECT_EQ(p.out_w, g.out_w);
-  EXPECT_EQ(p.degree, g.degree);
-  EXPECT_EQ(p.component, g.component);
-  EXPECT_TRUE(p.weight_scale == g.weight_scale);
+  r1::test::expect_same_graph(**parallel, g);
+  // The build that releases the link records as soon as it holds them (R1-EPO-005): the same
+  // graph, and no records left.
+  r1::Snapshot spent = *snap;
+  auto released = r1::build_graph_releasing_links(spent);
+  ASSERT_TRUE(released.is_ok()) << released.status().message();
+  r1::test::expect_same_graph(*released, g);
+  EXPECT_TRUE(spent.links.empty());
 
   // A_sym = A0 + A0^T, A2 antisymmetric, normalised by the largest A_sym entry.
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<cpp_int, cpp_int>> sym;

@@ -67,6 +67,17 @@ Result<std::unique_ptr<InputFile>> InputFile::open(const std::string& path) {
   return f;
 }
 
+void InputFile::drop_pages(std::string_view part) const {
+  if (map_ == nullptr || part.empty()) return;
+  const auto lo = reinterpret_cast<std::uintptr_t>(part.data());
+  const auto hi = lo + part.size();
+  const auto first = reinterpret_cast<std::uintptr_t>(data_), last = first + size_;
+  if (lo < first || hi > last) return;  // not this file's bytes
+  const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
+  const std::uintptr_t begin = (lo + page - 1) / page * page, end = hi / page * page;
+  if (end > begin) (void)::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);  // advice: ignoring a refusal is safe
+}
+
 InputFile::~InputFile() {
   if (map_ != nullptr) ::munmap(map_, size_);
 }

@@ -70,6 +70,7 @@ struct RangeContext {
   std::uint64_t offset;      // its byte offset in the file, for messages
   const std::string& file;
   const SnapshotConfig& config;
+  const std::function<void(std::string_view)>& consumed;  // R1-IN-022; may be empty
 };
 
 // Decodes and checks records [first, last) into out[first, last), numbering ids with `numbering` (the
@@ -81,7 +82,14 @@ Status parse_records(const RangeContext& ctx, std::size_t first, std::size_t las
   // The id lookups are cache misses on large snapshots: the index slots of the record kAhead on
   // are fetched early (from the part's second record on, when its index is not empty).
   constexpr std::size_t kAhead = 16;
+  // Every kRelease records the bytes parsed since are handed back (R1-IN-022).
+  constexpr std::size_t kRelease = std::size_t{1} << 16;
+  std::size_t released = first;
   for (std::size_t i = first; i < last; ++i) {
+    if (ctx.consumed && i - released == kRelease) {
+      ctx.consumed(std::string_view(reinterpret_cast<const char*>(ctx.base + released * kRecordBytes), kRelease * kRecordBytes));
+      released = i;
+    }
     if (i > first && i + kAhead < last) {
       ParticleId ahead;
       for (const std::size_t field : {32u, 64u}) {
@@ -120,12 +128,15 @@ Status parse_records(const RangeContext& ctx, std::size_t first, std::size_t las
     out[i] = l;
     tick(i);
   }
+  if (ctx.consumed && last > released)
+    ctx.consumed(std::string_view(reinterpret_cast<const char*>(ctx.base + released * kRecordBytes), (last - released) * kRecordBytes));
   return Status::ok();
 }
 
 }  // namespace
 
-Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file, const ProgressFn& progress) {
+Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file, const ProgressFn& progress,
+                                 const std::function<void(std::string_view)>& consumed) {
   R1_ASSIGN(Container c, parse_container(bytes, file));
   for (const char* required : {"card", "config", "cyberlinks"})
     if (c.find(required) == nullptr) return Status::input(file + ": required section '" + required + "' is missing");
@@ -155,7 +166,7 @@ Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file
   // on one thread.
   const std::size_t half = n >= kSplitRecords ? n / 2 : n;
   Status first_status = Status::ok(), second_status = Status::ok();
-  const RangeContext ctx{base, links->offset, file, s.config};
+  const RangeContext ctx{base, links->offset, file, s.config, consumed};
   // Sized first (the pages touched here, not by the parse), so both halves write in place.
   s.links.resize(n);
   const auto parse_first = [&] {

@@ -60,7 +60,9 @@ Result<Snapshot> read_snapshot(const std::string& path, const ReadOptions& o) {
   if (in->bytes().empty()) return Status::input(name + ": empty file");
   Result<Snapshot> r = Status::internal("unreachable");
   switch (f) {
-    case SnapshotFormat::kGraph: r = detail::read_graph_file(in->text(), name, o.progress); break;
+    case SnapshotFormat::kGraph:
+      r = detail::read_graph_file(in->text(), name, o.progress, [&in](std::string_view part) { in->drop_pages(part); });
+      break;
     case SnapshotFormat::kTsv: r = detail::read_edge_list(in->text(), name, false, o.progress); break;
     case SnapshotFormat::kCsv: r = detail::read_edge_list(in->text(), name, true, o.progress); break;
     case SnapshotFormat::kMatrixMarket: r = detail::read_matrix_market(in->text(), name, o.progress); break;

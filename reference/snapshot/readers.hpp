@@ -1,6 +1,7 @@
 // Internal entry points of the snapshot readers and writers (R1-IN-001..035).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -9,7 +10,9 @@
 
 namespace r1::detail {
 
-Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file, const ProgressFn& progress);
+// `consumed`, when set, is told of record bytes the parse is done with (R1-IN-022), a part at a time.
+Result<Snapshot> read_graph_file(std::string_view bytes, const std::string& file, const ProgressFn& progress,
+                                 const std::function<void(std::string_view)>& consumed = {});
 Result<Snapshot> read_edge_list(std::string_view bytes, const std::string& file, bool csv, const ProgressFn& progress);
 Result<Snapshot> read_matrix_market(std::string_view bytes, const std::string& file, const ProgressFn& progress);
 

@@ -6,7 +6,9 @@
 #include "block_lanczos.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -18,41 +20,73 @@ namespace r1::spectral {
 
 // The compact copies a block application reads and writes, kept across applications: a fresh
 // pair per application is n x b entries each (112 MB at 10^6 particles), whose pages the
-// kernel would map and clear again every time.
+// kernel would map and clear again every time. A block of fewer than 8 columns has rows of
+// compact_ld(count) entries, whole divisions of a 64-byte line, and its first row starts a line
+// (R1-SPEC-074): a row's gather then reads one line, and a backend's rows read the block in place
+// instead of copying it to such rows first (at 10^6 a 64 MB copy per application). The entries
+// of a row past its columns are zero, which the filter's recurrence keeps.
+static std::size_t compact_ld(std::size_t count) { return count < 8 ? std::bit_ceil(count) : count; }
+
 template <class Scalar>
-struct CompactBlocks {
-  std::vector<Scalar> x, y, z;
+class LineBlock {
+ public:
+  // `entries` entries, zero when first made, the first on a 64-byte boundary; kept as they are
+  // while the size stays the same.
+  Scalar* get(std::size_t entries) {
+    constexpr std::size_t kLine = 64 / sizeof(Scalar);
+    if (entries != size_) {
+      std::vector<Scalar>().swap(buf_);  // the old block goes before the new one comes
+      buf_.assign(entries + kLine, Scalar{});
+      size_ = entries;
+    }
+    const auto misalign = reinterpret_cast<std::uintptr_t>(buf_.data()) % 64;
+    return buf_.data() + (misalign == 0 ? 0 : (64 - misalign) / sizeof(Scalar));
+  }
+
+ private:
+  std::vector<Scalar> buf_;
+  std::size_t size_ = 0;
 };
 
-// x <- panel columns src .. src + count - 1 as a compact n x count block, and back.
 template <class Scalar>
-void to_compact(const PanelOps<Scalar>& ops, const Panel<Scalar>& p, std::uint32_t src, std::size_t count, Scalar* x) {
+struct CompactBlocks {
+  LineBlock<Scalar> x, y, z;
+};
+
+// x <- panel columns src .. src + count - 1 as a block with rows ld apart (the entries past count
+// zero), and back.
+template <class Scalar>
+void to_compact(const PanelOps<Scalar>& ops, const Panel<Scalar>& p, std::uint32_t src, std::size_t count,
+                std::size_t ld, Scalar* x) {
   for_row_blocks(p.rows(), ops.parallel(), [&](std::size_t lo, std::size_t hi) {
-    for (std::size_t i = lo; i < hi; ++i)
-      for (std::size_t c = 0; c < count; ++c) x[i * count + c] = p.at(i, src + c);
+    for (std::size_t i = lo; i < hi; ++i) {
+      for (std::size_t c = 0; c < count; ++c) x[i * ld + c] = p.at(i, src + c);
+      for (std::size_t c = count; c < ld; ++c) x[i * ld + c] = Scalar{};
+    }
   });
 }
 template <class Scalar>
-void from_compact(const PanelOps<Scalar>& ops, const Scalar* y, std::size_t count, Panel<Scalar>& p, std::uint32_t dst) {
+void from_compact(const PanelOps<Scalar>& ops, const Scalar* y, std::size_t count, std::size_t ld, Panel<Scalar>& p,
+                  std::uint32_t dst) {
   for_row_blocks(p.rows(), ops.parallel(), [&](std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i)
-      for (std::size_t c = 0; c < count; ++c) p.at(i, dst + c) = y[i * count + c];
+      for (std::size_t c = 0; c < count; ++c) p.at(i, dst + c) = y[i * ld + c];
   });
 }
 
 // Columns dst.. <- L~ columns src.. (count of each, dst and src runs disjoint). The operator
-// gathers a row of the source block per stored entry: from a compact n x count copy those rows
-// are 8 count bytes apart instead of a whole panel row, which keeps large graphs in cache. The
-// values are those of apply_block on the panel itself (which writes every entry of y).
+// gathers a row of the source block per stored entry: from a compact copy those rows are a line
+// or less apart instead of a whole panel row, which keeps large graphs in cache. The values are
+// those of apply_block on the panel itself (which writes every entry of y).
 template <class Scalar>
 void apply_compact(const SpectralOperator<Scalar>& op, const PanelOps<Scalar>& ops, Panel<Scalar>& p, std::uint32_t src,
                    std::uint32_t dst, std::size_t count, CompactBlocks<Scalar>& buf) {
-  const std::size_t n = p.rows();
-  buf.x.resize(n * count);
-  buf.y.resize(n * count);
-  to_compact(ops, p, src, count, buf.x.data());
-  op.apply_block(buf.x.data(), count, buf.y.data(), count, count, ops.parallel());
-  from_compact(ops, buf.y.data(), count, p, dst);
+  const std::size_t n = p.rows(), ld = compact_ld(count);
+  Scalar* x = buf.x.get(n * ld);
+  Scalar* y = buf.z.get(n * ld);  // not y: a solve whose filter steps are fused never makes y
+  to_compact(ops, p, src, count, ld, x);
+  op.apply_block(x, ld, y, ld, count, ops.parallel());
+  from_compact(ops, y, count, ld, p, dst);
 }
 
 template <class Scalar>
@@ -204,33 +238,44 @@ class Solver {
   void apply_filtered(Col src, Col dst, std::size_t count) {
     const ChebyshevFilter& f = filter_;
     const double e = f.e(), c = f.c(), s1 = f.s1(), tau = 2 / s1;
-    const std::size_t n = p_.rows(), b = count, len = n * b;
-    compact_.x.resize(len);
-    compact_.y.resize(len);
-    compact_.z.resize(len);
-    Scalar* cur = compact_.x.data();
-    Scalar* prev = compact_.z.data();
-    Scalar* img = compact_.y.data();
-    to_compact(ops_, p_, src, b, cur);
-    auto image = [&](const Scalar* x) {
-      op_.apply_block(x, b, img, b, b, ops_.parallel());
+    const std::size_t n = p_.rows(), b = count, ld = compact_ld(b), len = n * ld;
+    Scalar* cur = compact_.x.get(len);
+    Scalar* prev = compact_.z.get(len);
+    Scalar* img = nullptr;  // L cur, where the backend's rows do not fuse the step (R1-SPEC-075)
+    to_compact(ops_, p_, src, b, ld, cur);
+    // One step: prev <- alpha L cur + beta cur + gamma prev (gamma = 0: prev is not read), then
+    // the two swap roles. The entries of a row past b are zero in cur (to_compact) and in L cur,
+    // so they are zero in every block the recurrence makes.
+    auto step = [&](double alpha, double beta, double gamma) {
       matvecs_ += static_cast<std::uint32_t>(b);
       ++passes_;
+      if (img == nullptr && op_.apply_three_term(cur, ld, prev, b, alpha, beta, gamma, ops_.parallel())) {
+        std::swap(cur, prev);
+        return;
+      }
+      if (img == nullptr) {
+        img = compact_.y.get(len);
+        if (ld > b) {
+          for_row_blocks(n, ops_.parallel(), [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i)
+              for (std::size_t k = b; k < ld; ++k) img[i * ld + k] = Scalar{};
+          });
+        }
+      }
+      op_.apply_block(cur, ld, img, ld, b, ops_.parallel());
+      ops_.three_term(len, img, cur, prev, alpha, beta, gamma);
+      std::swap(cur, prev);
     };
     // Y1 = -(s1/e) (L X - c X) (Y0 = -X), into prev's buffer; then cur = Y1, prev = X.
-    image(cur);
-    ops_.three_term(len, img, cur, prev, -s1 / e, c * s1 / e, 0.0);
-    std::swap(cur, prev);
+    step(-s1 / e, c * s1 / e, 0.0);
     double sg = s1;
     for (std::uint32_t i = 2; i <= f.degree; ++i) {
       const double sn = 1 / (tau - sg);
-      image(cur);
       // Y_new = 2 sn/e (L Y - c Y) - sg sn Y_prev, over Y_prev.
-      ops_.three_term(len, img, cur, prev, 2 * sn / e, -2 * c * sn / e, i == 2 ? sg * sn : -sg * sn);
-      std::swap(cur, prev);
+      step(2 * sn / e, -2 * c * sn / e, i == 2 ? sg * sn : -sg * sn);
       sg = sn;
     }
-    from_compact(ops_, cur, b, p_, dst);
+    from_compact(ops_, cur, b, ld, p_, dst);
   }
 
   void orthonormalize_block(Col w0, const std::vector<Col>& list, std::size_t gap_begin, std::size_t gap_end,

@@ -152,6 +152,16 @@ Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, con
     if (options.q32_rows) op_result->rows = options.q32_rows(*op_result);
   }
   const SpectralOperator<Scalar>& op = *op_result;
+  // Rows that hold M's entries serve every application of the iterative solve: the operator's
+  // own copy goes until the outputs need it (R1-SPEC-076).
+  [[maybe_unused]] bool released = false;
+  if constexpr (std::is_same_v<Scalar, fx::Q32>) {
+    if (op.rows != nullptr && op.rows->holds_entries() && g.n - 1 > kDenseMax) {
+      std::vector<Scalar>().swap(op_result->m);
+      released = true;
+    }
+  }
+  if (options.operator_ready) options.operator_ready();
   Spectrum<Scalar> out;
   out.n = g.n;
   out.rho = op.rho.to_double();
@@ -191,8 +201,12 @@ Result<Spectrum<Scalar>> embed(const Graph& g, const SpectralParams& params, con
     out.u[c] = p.copy_column(0);
   }
   // The sums an incremental epoch carries (R1-INC-038): one more block application, the
-  // certificate's rather than the solve's, so spectral_work does not count it.
-  if constexpr (std::is_same_v<Scalar, fx::Q32>) residual_sums(op, out, options.parallel);
+  // certificate's rather than the solve's, so spectral_work does not count it. They read M's
+  // entries row by row, so released entries come back first (the basis is gone by now).
+  if constexpr (std::is_same_v<Scalar, fx::Q32>) {
+    if (released) op.rows->restore_entries(op_result->m);
+    residual_sums(op, out, options.parallel);
+  }
   return out;
 }
 

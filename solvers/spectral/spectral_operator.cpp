@@ -168,12 +168,14 @@ Result<SpectralOperator<double>> spectral_operator_f64(const Graph& g, const Spe
 // cost; a prefetch changes no bit.
 constexpr std::uint64_t kGatherAhead = 32;
 
-template <>
-void SpectralOperator<fx::Q32>::apply_block(const fx::Q32* x, std::size_t ldx, fx::Q32* y, std::size_t ldy,
-                                            std::size_t count, bool parallel) const {
-  const Graph& gr = *graph;
-  const bool par = parallel && n >= spectral::kParallelMin;
-  // c_col = RNE(sum_j g_j x_j): the rank-one coefficient of each column, rounded once to Q32.
+namespace {
+
+// c_col = RNE(sum_j g_j x_j): the rank-one coefficient of each column, rounded once to Q32 (all
+// zero when rho = 0).
+std::vector<std::int64_t> rank_one_coefficients(const SpectralOperator<fx::Q32>& op, const fx::Q32* x, std::size_t ldx,
+                                                std::size_t count, bool par) {
+  const std::size_t n = op.n;
+  const std::vector<fx::Q32>& g = op.g;
   std::vector<std::int64_t> c(count, 0);
   if (!g.empty()) {
     tbb::enumerable_thread_specific<std::vector<FastExact>> parts([count] { return std::vector<FastExact>(count); });
@@ -188,9 +190,46 @@ void SpectralOperator<fx::Q32>::apply_block(const fx::Q32* x, std::size_t ldx, f
       c[col] = total.round_shift(32);
     }
   }
-  if (rows != nullptr && ldx == count && ldy == count) {
-    // A backend's rows (R1-SPEC-073): the same exact sums, rounded once.
-    rows->apply(x, g.empty() ? std::span<const std::int64_t>() : std::span<const std::int64_t>(c), y, count);
+  return c;
+}
+
+}  // namespace
+
+template <>
+bool SpectralOperator<fx::Q32>::apply_three_term(const fx::Q32* x, std::size_t ld, fx::Q32* p, std::size_t count,
+                                                 double alpha, double beta, double gamma, bool parallel) const {
+  if (rows == nullptr || ld < count) return false;
+  const std::vector<std::int64_t> c = rank_one_coefficients(*this, x, ld, count, parallel && n >= spectral::kParallelMin);
+  return rows->apply_three_term(x, ld, g.empty() ? std::span<const std::int64_t>() : std::span<const std::int64_t>(c), p,
+                                count, alpha, beta, gamma);
+}
+
+template <>
+bool SpectralOperator<double>::apply_three_term(const double*, std::size_t, double*, std::size_t, double, double, double,
+                                                bool) const {
+  return false;
+}
+
+template <>
+void SpectralOperator<fx::Q32>::apply_block(const fx::Q32* x, std::size_t ldx, fx::Q32* y, std::size_t ldy,
+                                            std::size_t count, bool parallel) const {
+  const Graph& gr = *graph;
+  const bool par = parallel && n >= spectral::kParallelMin;
+  const std::vector<std::int64_t> c = rank_one_coefficients(*this, x, ldx, count, par);
+  if (rows != nullptr) {
+    // A backend's rows (R1-SPEC-073): the same exact sums, rounded once. Every application goes
+    // to them: they may hold the operator's entries while m is released (R1-SPEC-076).
+    const auto coef = g.empty() ? std::span<const std::int64_t>() : std::span<const std::int64_t>(c);
+    if (ldx == count && ldy == count) {
+      rows->apply(x, coef, y, count);
+    } else if (ldx != ldy || ldx < count || !rows->apply_strided(x, ldx, coef, y, count)) {
+      std::vector<fx::Q32> xc(n * count), yc(n * count);
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t col = 0; col < count; ++col) xc[i * count + col] = x[i * ldx + col];
+      rows->apply(xc.data(), coef, yc.data(), count);
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t col = 0; col < count; ++col) y[i * ldy + col] = yc[i * count + col];
+    }
     return;
   }
   const i128 one = i128{1} << 32;

@@ -71,10 +71,14 @@ Result<Epoch> run_epoch(const Snapshot& snapshot, const Graph& graph, const Epoc
                         const ProgressFn& progress = {});
 
 // The parts every pipeline fills the same way (R1-BKD-011): the digest (its time is the first
-// timing), ids, titles, counts, the layout edges and the parameters. `previous`: the record
-// chunks of the epoch before in a chain, whose leaves the digest reuses (R1-EPO-017).
+// timing), counts and the parameters. `previous`: the record chunks of the epoch before in a
+// chain, whose leaves the digest reuses (R1-EPO-017).
 Epoch epoch_header(const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,
                    const RecordChunks* previous = nullptr);
+// The per-particle tables every pipeline fills the same way: ids, display titles and the rows'
+// out-link digests (what the next epoch of a chain compares). run_epoch fills them after the
+// spectral stage, whose basis is the epoch's peak of memory (R1-EPO-006).
+void epoch_particles(Epoch& e, const Snapshot& snapshot, const Graph& graph);
 // Encoding and hierarchy for an epoch whose focus, sign-conventioned spectrum and frame are set,
 // then the check that every stage returned data of the epoch's shape.
 Status epoch_tail(Epoch& e, const Snapshot& snapshot, const Graph& graph, const EpochOptions& options,

@@ -24,6 +24,10 @@ class InputFile {
   std::span<const std::uint8_t> bytes() const { return {data_, size_}; }
   std::string_view text() const { return {reinterpret_cast<const char*>(data_), size_}; }
   const std::string& name() const { return name_; }  // for messages: the path, or "<stdin>"
+  // A reader done with `part` (a range of text()) lets its pages go from this process's memory
+  // (R1-IN-022): for a mapped file the whole pages inside it are dropped (MADV_DONTNEED; read
+  // again, they come back from the file, the same bytes); a file read into memory keeps them.
+  void drop_pages(std::string_view part) const;
 
  private:
   InputFile() = default;

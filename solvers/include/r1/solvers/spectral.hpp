@@ -30,6 +30,30 @@ class BlockRows {
  public:
   virtual ~BlockRows() = default;
   virtual void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) = 0;
+  // The same on blocks whose rows are ld >= count entries apart (row i, column c at x[i * ld + c]
+  // and y[i * ld + c]); the entries of a row past count are neither read nor written. The solver's
+  // compact blocks of fewer than 8 columns have rows of whole 64-byte lines (R1-SPEC-074). False
+  // (the default), with nothing written: the rows take compact blocks only, and the operator
+  // copies to and from compact blocks around apply().
+  virtual bool apply_strided(const fx::Q32* /*x*/, std::size_t /*ld*/, std::span<const std::int64_t> /*coef*/,
+                             fx::Q32* /*y*/, std::size_t /*count*/) {
+    return false;
+  }
+  // The filter's step fused with the application (R1-SPEC-075): with s = L~ x (the rows above),
+  // p <- spectral::three_term(n ld, s, x, p, alpha, beta, gamma) on blocks of rows ld >= count
+  // entries apart whose entries past count are zero in x and p (they stay zero), without an
+  // n x ld block for s. The same bits as applying and then running the recurrence. False (the
+  // default), with nothing written: the solver does exactly that.
+  virtual bool apply_three_term(const fx::Q32* /*x*/, std::size_t /*ld*/, std::span<const std::int64_t> /*coef*/,
+                                fx::Q32* /*p*/, std::size_t /*count*/, double /*alpha*/, double /*beta*/,
+                                double /*gamma*/) {
+    return false;
+  }
+  // True when the rows keep M's entries themselves, exactly (R1-SPEC-076): the solver may then
+  // release SpectralOperator::m while the rows serve its applications, and restore_entries gives
+  // the entries back bit for bit. False (the default): the rows read the operator's.
+  virtual bool holds_entries() const { return false; }
+  virtual void restore_entries(std::vector<fx::Q32>& /*m*/) const {}
 };
 }  // namespace spectral
 
@@ -88,6 +112,9 @@ struct SpectralOptions {
   // The Q32 operator's rows for the solver's block applications (R1-SPEC-073); empty: the
   // host's. The bytes must not change.
   Q32RowsFactory q32_rows;
+  // Called once the operator (and a backend's rows) are formed: from then on the solve reads of
+  // the graph only n, row_ptr, col, degree and component_size (R1-EPO-006).
+  std::function<void()> operator_ready;
 };
 
 // The operator the solver iterates on (R1-SPEC-001..006), for export and tests:
@@ -113,6 +140,11 @@ struct SpectralOperator {
   // must not overlap.
   void apply_block(const Scalar* x, std::size_t ldx, Scalar* y, std::size_t ldy, std::size_t count,
                    bool parallel = false) const;
+  // BlockRows::apply_three_term through the backend's rows, the rank-one coefficients formed as
+  // apply_block forms them. False, with nothing written, where no rows fuse the step (the host's,
+  // fp64): the caller applies and then runs the recurrence.
+  bool apply_three_term(const Scalar* x, std::size_t ld, Scalar* p, std::size_t count, double alpha, double beta,
+                        double gamma, bool parallel = false) const;
 };
 
 // rho by decision 4 (R1-SPEC-002): the forced value, else 0 for a connected graph and the mean

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 #include "r1/spec/anchor.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/overlay.hpp"
+#include "r1/spec/status.hpp"
 
 namespace r1 {
 
@@ -71,6 +73,14 @@ struct EpochOptions {
   // R1-EPO-017) when the stages are done, so that they are not held twice meanwhile.
   std::optional<hemera::Digest> snapshot_digest;
   double snapshot_digest_seconds = 0;
+  // The caller's hooks around the spectral solve, the epoch's peak of memory (R1-EPO-006):
+  // `spectral_operator_ready` runs once the spectral stage has formed its operator, after which
+  // the stage reads of the layout graph only n, row_ptr, col, degree and component_size until it
+  // returns; `spectral_done` runs when the stage has returned (also on an error), before any
+  // other stage reads the graph, and an error it returns ends the epoch. `r1 epoch` parks the
+  // graph's other arrays between the two.
+  std::function<void()> spectral_operator_ready;
+  std::function<Status()> spectral_done;
 };
 
 }  // namespace r1

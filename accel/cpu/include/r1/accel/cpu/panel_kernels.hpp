@@ -38,6 +38,16 @@ Q32KernelFactory kernel_factory(Simd level);
 // with AVX-512 IFMA, a block application's exact row sums vectorised over the block's columns
 // (block_rows.cpp), on TBB tasks when `parallel`; below IFMA none (an empty factory: the
 // solver's own rows run).
-Q32RowsFactory rows_factory(Simd level, bool parallel);
+// The filter's step is fused into the rows (R1-SPEC-075) from `fuse_from` rows: what it saves is
+// a block of 32 MB or more, and below, where the blocks stay in cache, the separate recurrence
+// was measured faster (BA 10^5: 5.4-6.8 s against 6.0-8.8 s a solve; BA 10^6 fused 214 s against
+// 218 s). Tests pass 0.
+inline constexpr std::size_t kFuseFrom = std::size_t{1} << 19;
+Q32RowsFactory rows_factory(Simd level, bool parallel, std::size_t fuse_from = kFuseFrom);
+
+// spectral::three_term's values on AVX-512 IFMA (which the CPU must have), on TBB tasks when
+// `parallel`: the filter's recurrence of the cpu kernels and of the rows' fused filter step.
+void three_term_ifma(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta,
+                     double gamma, bool parallel);
 
 }  // namespace r1::accel::cpu
