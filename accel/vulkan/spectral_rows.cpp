@@ -105,13 +105,26 @@ class VulkanRows final : public spectral::BlockRows {
   VulkanRows& operator=(const VulkanRows&) = delete;
 
   void apply(const fx::Q32* x, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) override {
+    run(x, count, coef, y, count);
+  }
+  // The solver's line-wide blocks (R1-SPEC-074): gathered into the device's compact block and
+  // scattered back as the copies to and from the device are made anyway.
+  bool apply_strided(const fx::Q32* x, std::size_t ld, std::span<const std::int64_t> coef, fx::Q32* y,
+                     std::size_t count) override {
+    run(x, ld, coef, y, count);
+    return true;
+  }
+
+ private:
+  void run(const fx::Q32* x, std::size_t ld, std::span<const std::int64_t> coef, fx::Q32* y, std::size_t count) {
     if (count == 0) return;
     if (has_g_ && coef.size() != count) throw std::runtime_error("vulkan spectral rows: one coefficient a column");
     std::lock_guard<std::mutex> guard(s_->lock);
     Context& ctx = *s_->ctx;
     const std::size_t entries = std::size_t{rows_} * count;
     std::vector<std::int64_t> xs(entries);
-    for (std::size_t k = 0; k < entries; ++k) xs[k] = x[k].raw;
+    for (std::size_t i = 0; i < rows_; ++i)
+      for (std::size_t c = 0; c < count; ++c) xs[i * count + c] = x[i * ld + c].raw;
     ok(ctx.buffer_ensure(buffers_[4], entries * 8));
     ok(ctx.buffer_write(buffers_[4], detail::bytes_of(std::span<const std::int64_t>(xs)), 0));
     const std::vector<std::int64_t> cs = has_g_ ? std::vector<std::int64_t>(coef.begin(), coef.end()) : std::vector<std::int64_t>(count, 0);
@@ -139,11 +152,10 @@ class VulkanRows final : public spectral::BlockRows {
     for (std::size_t k = 0; k < entries; ++k) {
       std::int64_t v = 0;
       std::memcpy(&v, out->data() + k * 8, 8);
-      y[k] = fx::Q32::from_raw(v);
+      y[k / count * ld + k % count] = fx::Q32::from_raw(v);
     }
   }
 
- private:
   void release() {
     for (const std::uint32_t id : buffers_) s_->ctx->buffer_release(id);  // 0 (never made): a no-op
   }
