@@ -8,8 +8,9 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstring>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
