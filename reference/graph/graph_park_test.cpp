@@ -16,21 +16,25 @@
 
 namespace {
 
-r1::Graph ba_graph(std::int64_t n, std::int64_t m) {
+r1::Snapshot ba_snapshot(std::int64_t n, std::int64_t m) {
   r1::GenParams p;
   p.kind = r1::GenKind::kBa;
   p.n = n;
   p.m = m;
   auto s = r1::generate(p);
   EXPECT_TRUE(s.is_ok()) << s.status().message();
-  auto g = r1::build_graph(*s);
+  return std::move(*s);
+}
+
+r1::Graph graph_of(const r1::Snapshot& s) {
+  auto g = r1::build_graph(s);
   EXPECT_TRUE(g.is_ok()) << g.status().message();
   return std::move(*g);
 }
 
 TEST(GraphPark, RestoresEveryArrayBitForBitAndKeepsWhatTheSolveReads) {
   for (const bool parallel : {false, true}) {
-    const r1::Graph original = ba_graph(20000, 4);  // several chunks per parked array
+    const r1::Graph original = graph_of(ba_snapshot(20000, 4));  // several chunks per parked array
     r1::Graph g = original;
     auto parked = r1::ParkedGraph::park(g, parallel);
     ASSERT_TRUE(parked.is_ok()) << parked.status().message();
@@ -88,18 +92,12 @@ RC_GTEST_PROP(GraphPark, RandomArraysComeBackExactly, ()) {
 // An epoch whose caller parks the graph while the spectral stage solves writes the same bytes as
 // one that does not, and the hooks run once each, in order.
 TEST(GraphPark, AnEpochThatParksWritesTheSameBytes) {
-  r1::GenParams p;
-  p.kind = r1::GenKind::kBa;
-  p.n = 3000;
-  p.m = 3;
-  auto s = r1::generate(p);
-  ASSERT_TRUE(s.is_ok());
-  auto g0 = r1::build_graph(*s);
-  ASSERT_TRUE(g0.is_ok());
-  r1::Graph g = *g0;
+  const r1::Snapshot s = ba_snapshot(3000, 3);
+  const r1::Graph g0 = graph_of(s);
+  r1::Graph g = g0;
   r1::EpochOptions o;
   o.parallel = true;
-  auto plain = r1::run_epoch(*s, *g0, o);
+  auto plain = r1::run_epoch(s, g0, o);
   ASSERT_TRUE(plain.is_ok()) << plain.status().message();
 
   r1::ParkedGraph parked;
@@ -116,12 +114,12 @@ TEST(GraphPark, AnEpochThatParksWritesTheSameBytes) {
     parked_when_done = g.w.empty() && !parked.empty();
     return parked.restore(g, true);
   };
-  auto e = r1::run_epoch(*s, g, o);
+  auto e = r1::run_epoch(s, g, o);
   ASSERT_TRUE(e.is_ok()) << e.status().message();
   EXPECT_EQ(ready, 1);
   EXPECT_EQ(done, 1);
   EXPECT_TRUE(parked_when_done);
-  r1::test::expect_same_graph(g, *g0);
+  r1::test::expect_same_graph(g, g0);
   plain->timings.clear();  // the manifest's timings differ from run to run
   e->timings.clear();
   auto a = r1::epoch_files(*plain);
@@ -132,7 +130,7 @@ TEST(GraphPark, AnEpochThatParksWritesTheSameBytes) {
   // A spectral_done error ends the epoch with that error.
   o.spectral_operator_ready = nullptr;
   o.spectral_done = [] { return r1::Status::internal("graph park: test"); };
-  auto failed = r1::run_epoch(*s, g, o);
+  auto failed = r1::run_epoch(s, g, o);
   ASSERT_FALSE(failed.is_ok());
   EXPECT_NE(failed.status().message().find("graph park: test"), std::string::npos);
 }
