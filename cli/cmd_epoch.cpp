@@ -180,24 +180,21 @@ Status run_epoch_cli(const EpochCliOptions& c) {
   if (!c.content.empty()) {
     R1_ASSIGN(content, render::read_content_side_file(c.content, s.particles));
   }
-  // The snapshot's digest and its record chunks before the stages, with PREV's chunk leaves where
-  // the chunks are PREV's (R1-EPO-017); then the link records go: nothing after the digest and
-  // the layout graph reads them, and the stages' peak is what they would add to (R1-EPO-005).
-  // Without PREV the digest comes first and the graph's build lets the records go as soon as it
-  // holds them, the load's peak.
+  // The snapshot's digest and its record chunks come before the layout graph, with PREV's chunk
+  // leaves where the chunks are PREV's (R1-EPO-017): the graph's build then lets the link records
+  // go as soon as it holds them (nothing after it reads them), so records and graph are never
+  // whole at once, the load's peak (R1-EPO-005). PREV's chunks are read by themselves for it
+  // while PREV's read goes on beside the build, and compared with what that read checked
+  // (R1-EPO-019).
   RecordChunks chunks;
-  const auto digest = [&](const RecordChunks* previous) {
+  const RecordChunks prev_chunks = c.from.empty() ? RecordChunks{} : peek_record_chunks(c.from);
+  {
     const auto td = std::chrono::steady_clock::now();
-    o.snapshot_digest = snapshot_digest(s, chunks, previous);
+    o.snapshot_digest = snapshot_digest(s, chunks, c.from.empty() ? nullptr : &prev_chunks);
     o.snapshot_digest_seconds = seconds_since(td);
-  };
-  Graph g;
-  if (c.from.empty()) {
-    digest(nullptr);
-    R1_ASSIGN(g, build_graph_releasing_links(s, progress.sink()));
-  } else {
-    R1_ASSIGN(g, build_graph(s, progress.sink()));
   }
+  Graph g;
+  R1_ASSIGN(g, build_graph_releasing_links(s, progress.sink()));
   const double read_s = seconds_since(t0) - o.snapshot_digest_seconds;  // the digest has a lap of its own
   Epoch e;
   double previous_s = 0;
@@ -222,8 +219,11 @@ Status run_epoch_cli(const EpochCliOptions& c) {
     R1_ASSIGN(Epoch prev, prev_read.get());
     R1_ASSIGN(const Anchor anchor, read_anchor((std::filesystem::path(c.from) / "anchor.bin").string()));
     previous_s = seconds_since(t1);
-    digest(&prev.record_chunks);
-    std::vector<Link>().swap(s.links);
+    // The digest's reused leaves must be the ones PREV's read checked.
+    if (!prev_chunks.leaves.empty() &&
+        (prev_chunks.sha != prev.record_chunks.sha || prev_chunks.leaves != prev.record_chunks.leaves))
+      return Status::input((std::filesystem::path(c.from) / "records.chunks").string() +
+                           ": changed while the epoch was read; run the command again");
     const std::string prev_nrf = (std::filesystem::path(c.from) / "field.nrf").string();
     if (c.field && std::filesystem::exists(prev_nrf)) {
       R1_ASSIGN(const auto in, InputFile::open(prev_nrf));

@@ -775,6 +775,18 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
 
 }  // namespace
 
+RecordChunks peek_record_chunks(const fs::path& dir) {
+  RecordChunks out;
+  auto in = InputFile::open((dir / "records.chunks").string());
+  if (!in.is_ok()) return out;
+  const std::string_view b = in.value()->text();
+  if (b.empty() || b.size() % kChunkRowBytes != 0) return out;
+  const std::size_t chunks = b.size() / kChunkRowBytes;
+  out.sha = format::read_bytes32_column(b, chunks, 2, 0);
+  out.leaves = format::read_bytes32_column(b, chunks, 2, 1);
+  return out;
+}
+
 Result<Epoch> read_epoch(const fs::path& dir, EpochLeaves* leaves, DigestCheck check) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return Status::input(dir.string() + ": not an epoch directory (make one with r1 epoch)");

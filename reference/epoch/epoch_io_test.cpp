@@ -358,6 +358,16 @@ TEST(EpochIo, RecordChunksAreReadBackAndBoundToTheSnapshotDigest) {
   EXPECT_EQ(r->record_chunks.sha, e.record_chunks.sha);
   EXPECT_EQ(r->record_chunks.leaves, e.record_chunks.leaves);
   EXPECT_EQ(r1::test::read_file(d / "a/records.chunks").size(), 4u * 64);
+  // Read by themselves (R1-EPO-019): the same rows; none from a directory without the file or
+  // with a file that is not whole rows.
+  const r1::RecordChunks peeked = r1::peek_record_chunks(d / "a");
+  EXPECT_EQ(peeked.sha, e.record_chunks.sha);
+  EXPECT_EQ(peeked.leaves, e.record_chunks.leaves);
+  EXPECT_TRUE(r1::peek_record_chunks(d / "nothing here").leaves.empty());
+  fs::create_directories(d / "cut");
+  r1::test::write_file(d / "cut/records.chunks", r1::test::read_file(d / "a/records.chunks").substr(0, 3 * 64 + 5));
+  EXPECT_TRUE(r1::peek_record_chunks(d / "cut").leaves.empty());
+  EXPECT_TRUE(r1::peek_record_chunks(d / "cut").sha.empty());
 
   auto other = e;
   other.snapshot_digest = r1::hemera::hash("another snapshot");

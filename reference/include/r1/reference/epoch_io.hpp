@@ -48,6 +48,12 @@ Status write_epoch(const Epoch& e, const std::filesystem::path& dir, const Epoch
 Result<Epoch> read_epoch(const std::filesystem::path& dir, EpochLeaves* leaves = nullptr,
                          DigestCheck check = DigestCheck::kHashEveryChunk);
 
+// The record chunks of the epoch in `dir` (its records.chunks) read by themselves and checked
+// against nothing: empty when the file is missing or not whole rows. For the next epoch of a chain,
+// whose digest reuses them while read_epoch is still checking the rest of PREV; that read then
+// checks them, and the caller compares the two (R1-EPO-019).
+RecordChunks peek_record_chunks(const std::filesystem::path& dir);
+
 // Adds (or replaces) the file `name` of an existing epoch directory and lists it in the manifest
 // with its size and digest (R1-NRF-030): the file, then the manifest, each written atomically.
 Status add_epoch_file(const std::filesystem::path& dir, const std::string& name, std::string_view bytes);
