@@ -14,6 +14,7 @@
 #include "r1/format/bytes.hpp"
 #include "r1/reference/atomic_file.hpp"
 #include "r1/reference/graph_build.hpp"
+#include "r1/reference/graph_park.hpp"
 #include "r1/reference/snapshot_io.hpp"
 #include "r1/reference/operator_export.hpp"
 #include "r1/solvers/spectral.hpp"
@@ -106,8 +107,13 @@ Status run_spectrum(const SpectrumOptions& o) {
   ProgressLine progress;
   R1_ASSIGN(const ReadOptions ro, o.input.read_options(progress.sink()));
   const auto t0 = std::chrono::steady_clock::now();
-  R1_ASSIGN(Snapshot snap, read_snapshot(o.file, ro));
-  R1_ASSIGN(Graph g, build_graph(snap, progress.sink()));
+  // Only the layout graph is needed from here on: its build lets the link records go as it fills
+  // its rows, and the snapshot goes once it is built (R1-SPEC-077).
+  Graph g;
+  {
+    R1_ASSIGN(Snapshot snap, read_snapshot(o.file, ro));
+    R1_ASSIGN(g, build_graph_releasing_links(snap, progress.sink()));
+  }
   const double load_s = seconds_since(t0);
   SpectralParams p;
   p.rho = o.rho;
@@ -117,6 +123,9 @@ Status run_spectrum(const SpectrumOptions& o) {
   p.filter_degree = o.filter_degree;
   SpectralOptions so;
   so.parallel = o.parallel;
+  // Once the solver has formed its operator, the graph's other arrays are not read again
+  // (R1-EPO-006): they go, and the solve's peak is the epoch's.
+  so.operator_ready = [&g] { release_unread_by_spectral(g); };
   if (!o.laplacian.empty()) {
     if (o.domain == "q32") {
       R1_ASSIGN(const auto op, spectral_operator_q32(g, p));
@@ -132,6 +141,7 @@ Status run_spectrum(const SpectrumOptions& o) {
     EpochOptions eo;
     eo.spectral = p;
     eo.parallel = o.parallel;
+    eo.spectral_operator_ready = so.operator_ready;
     R1_ASSIGN(const auto s, chosen.backend->spectral(g, eo, progress.sink()));
     const double solve_s = seconds_since(t1);
     progress.finish();

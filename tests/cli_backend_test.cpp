@@ -4,7 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "test_support.hpp"
@@ -69,6 +73,48 @@ TEST(CliBackend, TheEnvironmentChoosesWhenTheOptionIsAbsentAndTheOptionWins) {
   const auto fp = run_cli({"spectrum", (d / "g.graph").string(), "--domain", "fp64"});
   EXPECT_EQ(fp.exit_code, 2);
   EXPECT_NE(fp.err.find("--domain fp64"), std::string::npos) << fp.err;
+}
+
+// `r1 spectrum` on every built backend solves what the epoch's spectral stage solves: the
+// manifest's eigenvalues exactly, and its vectors (spectral.q32, after the sign convention) up to
+// one sign per vector; the exported operator is the n x n matrix (R1-SPEC-077: the command holds
+// only what the solve reads, which must not change a value).
+TEST(CliSpectrum, EveryBackendGivesTheEpochsSpectrum) {
+  r1::test::ScopedEnv env("R1_BACKEND", nullptr);
+  r1::test::TempDir d;
+  const std::size_t n = 400;
+  ASSERT_EQ(run_cli({"gen", "ba", "--n", std::to_string(n), "--m", "3", "-o", (d / "g.graph").string()}).exit_code, 0);
+  ASSERT_EQ(run_cli({"epoch", (d / "g.graph").string(), "--no-field", "--no-timings", "-q", "-o", (d / "e").string()}).exit_code, 0);
+  const auto manifest = nlohmann::json::parse(r1::test::read_file(d / "e" / "manifest.json"));
+  const std::string u = r1::test::read_file(d / "e" / "spectral.q32");
+  ASSERT_EQ(u.size(), n * 5 * 8);
+  for (const char* backend : {"reference", "cpu"}) {
+    SCOPED_TRACE(backend);
+    const fs::path vec = d / (std::string(backend) + ".f64"), lap = d / (std::string(backend) + ".mtx");
+    const auto r = run_cli({"spectrum", (d / "g.graph").string(), "--backend", backend, "--json", "--vectors", vec.string(),
+                            "--laplacian", lap.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("n").get<std::size_t>(), n);
+    EXPECT_EQ(j.at("eigenvalues"), manifest.at("eigenvalues"));
+    const std::string v = r1::test::read_file(vec);
+    ASSERT_EQ(v.size(), n * 5 * 8);
+    for (std::size_t c = 0; c < 5; ++c) {
+      int sign = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        double got = 0;
+        std::int64_t raw = 0;
+        std::memcpy(&got, v.data() + (i * 5 + c) * 8, 8);
+        std::memcpy(&raw, u.data() + (i * 5 + c) * 8, 8);
+        const double want = std::ldexp(static_cast<double>(raw), -32);
+        if (sign == 0 && want != 0) sign = got == want ? 1 : -1;
+        ASSERT_EQ(got, sign < 0 ? -want : want) << "u_" << c + 2 << " row " << i;
+      }
+    }
+    const std::string mtx = r1::test::read_file(lap);
+    EXPECT_EQ(mtx.rfind("%%MatrixMarket", 0), 0u);
+    EXPECT_NE(mtx.find("\n" + std::to_string(n) + " " + std::to_string(n) + " "), std::string::npos);
+  }
 }
 
 }  // namespace

@@ -98,6 +98,10 @@ Status unpack(const ParkedGraph::Packed& p, std::vector<T>& v, bool parallel) {
 
 }  // namespace
 
+void release_unread_by_spectral(Graph& g) {
+  each_parked(g, [](auto& v) { std::remove_reference_t<decltype(v)>().swap(v); });
+}
+
 Result<ParkedGraph> ParkedGraph::park(Graph& g, bool parallel) {
   ParkedGraph out;
   Status st = Status::ok();

@@ -12,6 +12,7 @@
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
 #include "r1/reference/snapshot_builder.hpp"
+#include "r1/solvers/spectral.hpp"
 #include "graph_compare.hpp"
 
 namespace {
@@ -133,6 +134,41 @@ TEST(GraphPark, AnEpochThatParksWritesTheSameBytes) {
   auto failed = r1::run_epoch(s, g, o);
   ASSERT_FALSE(failed.is_ok());
   EXPECT_NE(failed.status().message().find("graph park: test"), std::string::npos);
+}
+
+// `r1 spectrum` lets the arrays park() would park go once the operator is formed (R1-SPEC-077):
+// the solve must give the same spectrum without them, in both domains, serial and parallel.
+TEST(GraphPark, TheSpectralSolveReadsNoReleasedArray) {
+  const r1::Graph g0 = graph_of(ba_snapshot(3000, 3));
+  r1::SpectralParams p;
+  for (const bool parallel : {false, true}) {
+    r1::SpectralOptions plain;
+    plain.parallel = parallel;
+    r1::Graph g = g0;
+    r1::SpectralOptions releasing = plain;
+    int ready = 0;
+    releasing.operator_ready = [&] {
+      ++ready;
+      r1::release_unread_by_spectral(g);
+    };
+    auto a = r1::spectral_embedding_q32(g0, p, {}, plain);
+    auto b = r1::spectral_embedding_q32(g, p, {}, releasing);
+    ASSERT_TRUE(a.is_ok() && b.is_ok());
+    EXPECT_EQ(ready, 1);
+    EXPECT_TRUE(g.w.empty() && g.a2.empty() && g.out_ptr.empty() && g.out_col.empty() && g.out_w.empty() &&
+                g.prior.empty() && g.dangling.empty() && g.component.empty());
+    EXPECT_EQ(a->eigenvalues, b->eigenvalues);
+    EXPECT_EQ(a->residuals, b->residuals);
+    EXPECT_EQ(a->u, b->u);
+    EXPECT_EQ(a->image, b->image);
+
+    g = g0;
+    auto c = r1::spectral_embedding_f64(g0, p, {}, plain);
+    auto d = r1::spectral_embedding_f64(g, p, {}, releasing);
+    ASSERT_TRUE(c.is_ok() && d.is_ok());
+    EXPECT_EQ(c->eigenvalues, d->eigenvalues);
+    EXPECT_EQ(c->u, d->u);
+  }
 }
 
 }  // namespace

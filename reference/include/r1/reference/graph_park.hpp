@@ -12,6 +12,10 @@
 
 namespace r1 {
 
+// Releases the arrays ParkedGraph::park compresses, for a caller that needs only what the
+// spectral solve reads from here on (`r1 spectrum`, R1-SPEC-077).
+void release_unread_by_spectral(Graph& g);
+
 class ParkedGraph {
  public:
   // Compresses w, a2, out_ptr, out_col, out_w, prior, dangling and component of `g` (zstd over
