@@ -166,6 +166,8 @@ TEST(GraphPark, TheSpectralSolveReadsNoReleasedArray) {
     auto c = r1::spectral_embedding_f64(g0, p, {}, plain);
     auto d = r1::spectral_embedding_f64(g, p, {}, releasing);
     ASSERT_TRUE(c.is_ok() && d.is_ok());
+    EXPECT_EQ(ready, 2);
+    EXPECT_TRUE(g.w.empty() && g.out_col.empty());
     EXPECT_EQ(c->eigenvalues, d->eigenvalues);
     EXPECT_EQ(c->u, d->u);
   }
