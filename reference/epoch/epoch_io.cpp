@@ -777,6 +777,15 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
 
 RecordChunks peek_record_chunks(const fs::path& dir) {
   RecordChunks out;
+  // Only a file the manifest lists: the read that checks PREV reads no other.
+  try {
+    auto mf = InputFile::open((dir / "manifest.json").string());
+    if (!mf.is_ok()) return out;
+    const json m = json::parse(mf.value()->text());
+    if (!m.contains("files") || !m.at("files").is_object() || !m.at("files").contains("records.chunks")) return out;
+  } catch (const std::exception&) {
+    return out;
+  }
   auto in = InputFile::open((dir / "records.chunks").string());
   if (!in.is_ok()) return out;
   const std::string_view b = in.value()->text();

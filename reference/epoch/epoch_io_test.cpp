@@ -365,9 +365,19 @@ TEST(EpochIo, RecordChunksAreReadBackAndBoundToTheSnapshotDigest) {
   EXPECT_EQ(peeked.leaves, e.record_chunks.leaves);
   EXPECT_TRUE(r1::peek_record_chunks(d / "nothing here").leaves.empty());
   fs::create_directories(d / "cut");
+  fs::copy_file(d / "a/manifest.json", d / "cut/manifest.json");
   r1::test::write_file(d / "cut/records.chunks", r1::test::read_file(d / "a/records.chunks").substr(0, 3 * 64 + 5));
   EXPECT_TRUE(r1::peek_record_chunks(d / "cut").leaves.empty());
   EXPECT_TRUE(r1::peek_record_chunks(d / "cut").sha.empty());
+  // A whole file the manifest does not list (read_epoch would not read it) gives no rows either.
+  r1::test::write_file(d / "cut/records.chunks", r1::test::read_file(d / "a/records.chunks"));
+  EXPECT_EQ(r1::peek_record_chunks(d / "cut").leaves, e.record_chunks.leaves);
+  auto listed = nlohmann::json::parse(r1::test::read_file(d / "cut/manifest.json"));
+  listed["files"].erase("records.chunks");
+  r1::test::write_file(d / "cut/manifest.json", listed.dump(2));
+  EXPECT_TRUE(r1::peek_record_chunks(d / "cut").leaves.empty());
+  r1::test::write_file(d / "cut/manifest.json", "{ not json");
+  EXPECT_TRUE(r1::peek_record_chunks(d / "cut").leaves.empty());
 
   auto other = e;
   other.snapshot_digest = r1::hemera::hash("another snapshot");

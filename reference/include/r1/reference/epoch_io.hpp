@@ -49,7 +49,8 @@ Result<Epoch> read_epoch(const std::filesystem::path& dir, EpochLeaves* leaves =
                          DigestCheck check = DigestCheck::kHashEveryChunk);
 
 // The record chunks of the epoch in `dir` (its records.chunks) read by themselves and checked
-// against nothing: empty when the file is missing or not whole rows. For the next epoch of a chain,
+// against nothing: empty when the manifest does not list the file or the file is missing or not
+// whole rows. For the next epoch of a chain,
 // whose digest reuses them while read_epoch is still checking the rest of PREV; that read then
 // checks them, and the caller compares the two (R1-EPO-019).
 RecordChunks peek_record_chunks(const std::filesystem::path& dir);
