@@ -3,6 +3,7 @@
 #include "r1/solvers/focus.hpp"
 
 #include <algorithm>
+#include <deque>
 #include <cmath>
 #include <new>
 #include <numeric>
@@ -190,12 +191,32 @@ Result<FocusPlan> plan_focus_steps(const Graph& g, const TriKernelParams& p, dou
 
 namespace {
 
+// How many iterates before the current one a repeat is looked for among (R1-FOC-093): periods up
+// to this are found. Speed only.
+constexpr std::size_t kRepeatWindow = 16;
+
+// A fingerprint of x's first `active` raws (wrapping sums of raw times an odd weight per index):
+// equal vectors have equal fingerprints; the converse is checked entry by entry.
+std::uint64_t fingerprint(const std::vector<Q32>& x, std::uint32_t active) {
+  std::uint64_t h = 0;
+  for (std::uint32_t i = 0; i < active; ++i)
+    h += static_cast<std::uint64_t>(x[i].raw) * ((std::uint64_t{i} << 1) * 0x9E3779B97F4A7C15u + 1);
+  return h;
+}
+
 // The tri-kernel steps (R1-FOC-050, R1-INC-051): `steps` times v = l_d D + l_s S + l_h H on the
 // first `active` entries of phi, then Proj onto `total` raws there; entries from `active` on stay.
 // `heat_offset` (empty, or one raw per active entry) is added exactly to the heat term (R1-INC-052).
+//
+// R1-FOC-093: a step reads phi (and the fixed operators, parameters and offset) and nothing else,
+// so once an iterate x_(t+1) equals an earlier x_m, the iterates from m on repeat with period
+// t + 1 - m, and x_steps is the kept x_(m + (steps - m) mod (t + 1 - m)): with `stop_at_repeat`
+// the remaining steps are not run. Q32 iterates settle into such a cycle once the contraction
+// leaves only the projection's last-raw ties moving (BA 10^5: period 2 from step 36; BA 300:
+// period 6 from step 36; BA 10^6: period 2 from step 79).
 void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std::uint32_t steps, std::uint32_t active,
-                   std::uint64_t total, bool parallel, std::vector<Q32>& phi, const ProgressFn& progress,
-                   const std::vector<std::int64_t>& heat_offset = {}) {
+                   std::uint64_t total, bool parallel, bool stop_at_repeat, std::vector<Q32>& phi,
+                   const ProgressFn& progress, const std::vector<std::int64_t>& heat_offset = {}) {
   const bool use_d = p.lambda_d.raw != 0, use_s = p.lambda_s.raw != 0, use_h = p.lambda_h.raw != 0;
   const HeatCoefficients heat = use_h ? heat_coefficients(p.tau, p.chebyshev_degree) : HeatCoefficients{};
   const bool offset = !heat_offset.empty();
@@ -204,6 +225,24 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
   // The springs and the heat kernel's first product N phi gather phi over the same rows: one pass
   // serves both (R1-FOC-090) where the heat kernel has a first product.
   const bool together = use_s && use_h && heat.q32.size() > 1 && !ops.on_products();
+  // The iterates before phi (oldest first) with their indices and fingerprints; the next iterate
+  // is projected into `next`. Every vector holds phi's entries from `active` on, which no step
+  // changes.
+  struct Kept {
+    std::uint32_t index;
+    std::uint64_t print;
+    std::vector<Q32> x;
+  };
+  std::deque<Kept> kept;
+  std::vector<Q32> next;
+  std::uint64_t phi_print = 0;
+  if (stop_at_repeat) {
+    next = phi;
+    phi_print = fingerprint(phi, active);
+  }
+  const auto same = [&](const std::vector<Q32>& a, const std::vector<Q32>& b) {
+    return std::equal(a.begin(), a.begin() + active, b.begin(), [](Q32 x, Q32 y) { return x.raw == y.raw; });
+  };
   for (std::uint32_t step = 0; step < steps; ++step) {
     // A zero-weight operator contributes exactly 0 and is skipped (R1-FOC-050).
     if (use_d) ops.diffusion(phi, d);
@@ -223,7 +262,37 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
         v[i] = Q32::from_raw(focus::round_q32(acc));
       }
     });
-    focus::project_onto(v, total, std::span<Q32>(phi).first(active));
+    if (!stop_at_repeat) {
+      focus::project_onto(v, total, std::span<Q32>(phi).first(active));
+      report(progress, "focus", step + 1, steps);
+      continue;
+    }
+    focus::project_onto(v, total, std::span<Q32>(next).first(active));
+    const std::uint64_t print = fingerprint(next, active);
+    // The earliest-found m with x_m = x_(step + 1): phi is x_step, the kept ones come before it.
+    std::optional<std::uint32_t> m;
+    if (print == phi_print && same(next, phi)) m = step;
+    for (auto it = kept.rbegin(); !m && it != kept.rend(); ++it)
+      if (it->print == print && same(next, it->x)) m = it->index;
+    if (m) {
+      const std::uint32_t at = *m + (steps - *m) % (step + 1 - *m);  // x_steps = x_at, m <= at <= step
+      if (at != step)
+        for (Kept& k : kept)
+          if (k.index == at) phi.swap(k.x);
+      report(progress, "focus", steps, steps);
+      return;
+    }
+    std::vector<Q32> spare;
+    if (kept.size() == kRepeatWindow) {
+      spare = std::move(kept.front().x);
+      kept.pop_front();
+    } else {
+      spare = phi;  // a fresh vector with phi's fixed entries
+    }
+    kept.push_back({step, phi_print, std::move(phi)});
+    phi = std::move(next);
+    next = std::move(spare);
+    phi_print = print;
     report(progress, "focus", step + 1, steps);
   }
 }
@@ -272,7 +341,7 @@ Result<Focus<Q32>> compute_focus_q32(const Graph& g, const TriKernelParams& p, d
     R1_ASSIGN(auto ops, focus::OperatorsQ32::build(g, p, options.parallel));
     if (options.products) R1_TRY(ops.use_products(options.products));
     std::vector<Q32> phi = project_to_simplex_q32(ops.prior());  // R1-FOC-012
-    run_steps_q32(ops, p, plan.steps, g.n, std::uint64_t{1} << 32, options.parallel, phi, progress);
+    run_steps_q32(ops, p, plan.steps, g.n, std::uint64_t{1} << 32, options.parallel, options.stop_at_repeat, phi, progress);
     // The heat term of the result, which the next incremental epoch starts from (R1-INC-052).
     std::vector<Q32> heat;
     if (p.lambda_h.raw != 0) focus::heat_q32(ops, heat_coefficients(p.tau, p.chebyshev_degree), phi, heat);
@@ -372,7 +441,7 @@ Result<Focus<Q32>> update_focus_q32(const Graph& g, const TriKernelParams& p, do
     // The start on R, projected onto the region's share (the identity when it already holds it).
     std::vector<Q32> first(x.begin(), x.begin() + active);
     focus::project_onto(first, total, std::span<Q32>(x).first(active));
-    run_steps_q32(ops, p, plan.steps, active, total, options.parallel, x, progress, heat_offset);
+    run_steps_q32(ops, p, plan.steps, active, total, options.parallel, options.stop_at_repeat, x, progress, heat_offset);
     for (std::uint32_t a = 0; a < active; ++a) phi[global[a]] = x[a];
     if (plogp)
       for (std::uint32_t a = 0; a < active; ++a) plogp->add_term(phi_log_phi(x[a]));

@@ -831,6 +831,7 @@ RC_GTEST_PROP(FocusProducts, ABackendsExactProductGivesTheRowLoopsBits, ()) {
   r1::FocusOptions on;
   on.products = plain_products(&applications);
   on.parallel = *rc::gen::arbitrary<bool>();
+  on.stop_at_repeat = false;  // every step runs, so every step's products are counted below
   const auto a = r1::compute_focus_q32(g, p, lambda2);
   const auto b = r1::compute_focus_q32(g, p, lambda2, {}, on);
   RC_ASSERT(a.is_ok());
@@ -1005,17 +1006,90 @@ TEST(FocusIteration, CyberankKeepsTheLeadingPlaces) {
 
 TEST(FocusIteration, ProgressCountsSteps) {
   const Graph g = generated(r1::GenKind::kRing, 16);
-  std::uint64_t calls = 0, last = 0, total = 0;
-  const auto q = r1::compute_focus_q32(g, TriKernelParams{}, 0.0, [&](std::string_view stage, std::uint64_t done, std::uint64_t of) {
-    EXPECT_EQ(stage, "focus");
-    EXPECT_EQ(done, last + 1);
-    last = done;
-    total = of;
-    ++calls;
-  });
-  ASSERT_TRUE(q.is_ok());
-  EXPECT_EQ(calls, q->steps);
-  EXPECT_EQ(total, q->steps);
+  for (const bool stop : {false, true}) {
+    std::uint64_t calls = 0, last = 0, total = 0;
+    r1::FocusOptions o;
+    o.stop_at_repeat = stop;
+    const auto q = r1::compute_focus_q32(
+        g, TriKernelParams{}, 0.0,
+        [&](std::string_view stage, std::uint64_t done, std::uint64_t of) {
+          EXPECT_EQ(stage, "focus");
+          EXPECT_GT(done, last);
+          if (!stop) {
+            EXPECT_EQ(done, last + 1);
+          }
+          last = done;
+          total = of;
+          ++calls;
+        },
+        o);
+    ASSERT_TRUE(q.is_ok());
+    EXPECT_EQ(last, q->steps);
+    EXPECT_EQ(total, q->steps);
+    // Every step reported; with stop_at_repeat the ring's iterates repeat well before the last of
+    // its 96 steps, and the report jumps to the end (R1-FOC-093).
+    if (stop) {
+      EXPECT_LT(calls, q->steps);
+    } else {
+      EXPECT_EQ(calls, q->steps);
+    }
+  }
+}
+
+// R1-FOC-093 at every step count up to the plan's: the stop lands on either parity of a period-2
+// repeat and on fixed points alike.
+TEST(FocusIteration, EveryStepCountGivesTheSameBitsWithTheStop) {
+  for (const Graph& g : {generated(r1::GenKind::kRing, 16), generated(r1::GenKind::kBa, 300, 3)}) {
+    r1::FocusOptions all;
+    all.stop_at_repeat = false;
+    const std::uint32_t planned = r1::compute_focus_q32(g, TriKernelParams{}, 0.0)->steps;
+    std::uint32_t stopped = 0;
+    for (std::uint32_t t = 1; t <= planned; ++t) {
+      TriKernelParams p;
+      p.max_steps = t;
+      std::uint64_t reports = 0;
+      const auto a = r1::compute_focus_q32(g, p, 0.0, {}, all);
+      const auto b = r1::compute_focus_q32(g, p, 0.0, [&](std::string_view, std::uint64_t, std::uint64_t) { ++reports; });
+      ASSERT_TRUE(a.is_ok() && b.is_ok());
+      ASSERT_EQ(a->steps, t);
+      ASSERT_EQ(a->phi, b->phi) << t << " steps";
+      ASSERT_EQ(a->heat, b->heat) << t << " steps";
+      if (reports < t) ++stopped;
+    }
+    EXPECT_GT(stopped, planned / 4) << "the iterates never repeated";
+  }
+}
+
+// R1-FOC-093: stopping at a repeated iterate gives every step's bits, for the full iteration and
+// the local update, on random graphs and parameters (a step count often far past the repeat).
+RC_GTEST_PROP(FocusIteration, StoppingAtARepeatGivesEveryStepsBits, ()) {
+  const Graph g = random_graph();
+  const TriKernelParams p = random_params();
+  const double lambda2 = *rc::gen::inRange(0, 1000) / 1000.0;
+  r1::FocusOptions all, stop;
+  all.stop_at_repeat = false;
+  stop.parallel = all.parallel = *rc::gen::arbitrary<bool>();
+  std::uint64_t reports = 0;
+  const auto a = r1::compute_focus_q32(g, p, lambda2, {}, all);
+  const auto b = r1::compute_focus_q32(g, p, lambda2, [&](std::string_view, std::uint64_t, std::uint64_t) { ++reports; }, stop);
+  RC_ASSERT(a.is_ok() && b.is_ok());
+  RC_ASSERT(a->phi == b->phi);
+  RC_ASSERT(a->heat == b->heat);
+  RC_ASSERT(a->steps == b->steps);
+  RC_ASSERT(a->cyberank == b->cyberank);
+  RC_ASSERT(a->syntropy == b->syntropy);
+  RC_TAG(reports < b->steps ? "stopped at a repeat" : "ran every step");
+  // The local update from the result on a region around a random particle.
+  const auto centre = *rc::gen::inRange<std::uint32_t>(0, g.n);
+  std::vector<std::uint32_t> region{centre};
+  for (std::uint64_t k = g.row_ptr[centre]; k < g.row_ptr[centre + 1]; ++k) region.push_back(g.col[k]);
+  std::sort(region.begin(), region.end());
+  region.erase(std::unique(region.begin(), region.end()), region.end());
+  const auto c = r1::update_focus_q32(g, p, lambda2, *a, region, {}, all);
+  const auto d = r1::update_focus_q32(g, p, lambda2, *a, region, {}, stop);
+  RC_ASSERT(c.is_ok() && d.is_ok());
+  RC_ASSERT(c->phi == d->phi);
+  RC_ASSERT(c->heat == d->heat);
 }
 
 }  // namespace

@@ -38,6 +38,10 @@ struct FocusOptions {
   // in-link sums) run on products made by this factory (R1-FOC-092): the same bits. The local
   // update (update_focus_q32) keeps the row loops.
   ExactProductFactory products;
+  // The Q32 step is a function of phi alone, so once an iterate equals the one one or two steps
+  // back, the later steps only repeat those two and the T(eps)-th iterate is known without them
+  // (R1-FOC-093): the same bits. False runs every step (the switch the tests use).
+  bool stop_at_repeat = true;
 };
 
 // The tri-kernel iteration phi <- Proj(l_d D(phi) + l_s S(phi) + l_h H(phi)) from Proj(u), run for
