@@ -269,7 +269,8 @@ void run_steps_q32(const focus::OperatorsQ32& ops, const TriKernelParams& p, std
     }
     focus::project_onto(v, total, std::span<Q32>(next).first(active));
     const std::uint64_t print = fingerprint(next, active);
-    // The earliest-found m with x_m = x_(step + 1): phi is x_step, the kept ones come before it.
+    // The latest m <= step with x_m = x_(step + 1) (the shortest period): phi is x_step, the kept
+    // ones come before it.
     std::optional<std::uint32_t> m;
     if (print == phi_print && same(next, phi)) m = step;
     for (auto it = kept.rbegin(); !m && it != kept.rend(); ++it)
