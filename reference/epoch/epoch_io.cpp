@@ -47,6 +47,14 @@ std::size_t record_chunk_count(std::uint64_t links) {
   return static_cast<std::size_t>(hemera::leaf_count(links * kRecordBytes));
 }
 
+// records.chunks' rows: per chunk its SHA-256, then its leaf.
+RecordChunks record_chunks_of(std::string_view b, std::size_t chunks) {
+  RecordChunks out;
+  out.sha = format::read_bytes32_column(b, chunks, 2, 0);
+  out.leaves = format::read_bytes32_column(b, chunks, 2, 1);
+  return out;
+}
+
 using format::kEdgeBytes;
 using format::q32_column;
 
@@ -733,8 +741,7 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
     if (b.size() != chunks * kChunkRowBytes)
       return Status::input((dir / "records.chunks").string() + ": " + std::to_string(b.size()) + " bytes for " +
                            std::to_string(e.links) + " links (expected " + std::to_string(chunks * kChunkRowBytes) + ")");
-    e.record_chunks.sha = format::read_bytes32_column(b, chunks, 2, 0);
-    e.record_chunks.leaves = format::read_bytes32_column(b, chunks, 2, 1);
+    e.record_chunks = record_chunks_of(b, chunks);
     // The leaves are the snapshot digest's: a file from another snapshot, or one of leaves that
     // do not make its digest, is not carried into the next epoch's digest.
     if (hemera::root_of_leaves(e.record_chunks.leaves) != e.snapshot_digest)
@@ -776,24 +783,20 @@ Result<Epoch> read_epoch_json(const fs::path& dir, const json& m, EpochLeaves* k
 }  // namespace
 
 RecordChunks peek_record_chunks(const fs::path& dir) {
-  RecordChunks out;
   // Only a file the manifest lists: the read that checks PREV reads no other.
   try {
     auto mf = InputFile::open((dir / "manifest.json").string());
-    if (!mf.is_ok()) return out;
+    if (!mf.is_ok()) return {};
     const json m = json::parse(mf.value()->text());
-    if (!m.contains("files") || !m.at("files").is_object() || !m.at("files").contains("records.chunks")) return out;
+    if (!m.contains("files") || !m.at("files").is_object() || !m.at("files").contains("records.chunks")) return {};
   } catch (const std::exception&) {
-    return out;
+    return {};
   }
   auto in = InputFile::open((dir / "records.chunks").string());
-  if (!in.is_ok()) return out;
+  if (!in.is_ok()) return {};
   const std::string_view b = in.value()->text();
-  if (b.empty() || b.size() % kChunkRowBytes != 0) return out;
-  const std::size_t chunks = b.size() / kChunkRowBytes;
-  out.sha = format::read_bytes32_column(b, chunks, 2, 0);
-  out.leaves = format::read_bytes32_column(b, chunks, 2, 1);
-  return out;
+  if (b.empty() || b.size() % kChunkRowBytes != 0) return {};
+  return record_chunks_of(b, b.size() / kChunkRowBytes);
 }
 
 Result<Epoch> read_epoch(const fs::path& dir, EpochLeaves* leaves, DigestCheck check) {
