@@ -3,6 +3,8 @@
 // solve.
 #include "r1/reference/incremental.hpp"
 
+#include "r1/fixedpoint/prefetch.hpp"
+
 #include <boost/multiprecision/cpp_int.hpp>
 
 #include <algorithm>
@@ -116,7 +118,7 @@ std::vector<std::uint64_t> out_row_digests(const Graph& g, std::span<const Parti
   spectral::for_row_blocks(g.n, true, [&](std::size_t lo, std::size_t hi) {
     for (std::size_t p = lo; p < hi; ++p)
       for (std::uint64_t k = g.out_ptr[p]; k < g.out_ptr[p + 1]; ++k) {
-        __builtin_prefetch(ids.data() + g.out_col[std::min(k + kAhead, last)]);
+        fx::gather_hint(ids.data() + g.out_col[std::min(k + kAhead, last)]);
         std::uint64_t t = 0;
         for (int b = 7; b >= 0; --b) t = (t << 8) | ids[g.out_col[k]][static_cast<std::size_t>(b)];
         d[p] += mix64(t ^ mix64(static_cast<std::uint64_t>(g.out_w[k])));

@@ -1,6 +1,8 @@
 // The layout graph: exact integer weights, A_sym CSR, A2, directed A0, degrees, components
 // (decision 3, R1-IN-050..058).
 #include "r1/reference/graph_build.hpp"
+
+#include "r1/fixedpoint/prefetch.hpp"
 #include "r1/solvers/focus.hpp"
 #include "r1/solvers/panel.hpp"
 
@@ -172,8 +174,8 @@ Result<Graph> build(const Snapshot& s, const ProgressFn& progress, bool parallel
   });
   // Calls emit(col, w, a2) for the merged entries of row i in column order: exact sums. The A0
   // entries a row refers to lie anywhere in `out` (a mirrored entry sits in its source's row), so
-  // the entry kAhead references on is fetched ahead: speed only.
-  constexpr std::uint64_t kAhead = 16;
+  // the entry kAhead references on is fetched ahead (fx::gather_hint): speed only.
+  constexpr std::uint64_t kAhead = 64;
   const std::uint64_t sym_size = sym.size();
   const auto merged_row = [&](std::size_t i, const auto& emit) -> Status {
     for (std::uint64_t k = sym_ptr[i]; k < sym_ptr[i + 1];) {
@@ -183,8 +185,8 @@ Result<Graph> build(const Snapshot& s, const ProgressFn& progress, bool parallel
       for (; k < sym_ptr[i + 1] && sym[k].col == col; ++k) {
         if (k + kAhead < sym_size) {
           const Entry* ahead = &out[sym[k + kAhead].out];
-          __builtin_prefetch(ahead);
-          __builtin_prefetch(reinterpret_cast<const char*>(ahead) + sizeof(Entry) - 1);
+          fx::gather_hint(ahead);
+          fx::gather_hint(reinterpret_cast<const char*>(ahead) + sizeof(Entry) - 1);
         }
         const Entry& e = out[sym[k].out];
         R1_TRY(add_to_pair(w, a2, e.w, sym[k].mirrored != 0 ? -e.a2 : e.a2, s.source));

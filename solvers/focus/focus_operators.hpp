@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "r1/fixedpoint/int128.hpp"
+#include "r1/fixedpoint/prefetch.hpp"
 #include "r1/fixedpoint/q32.hpp"
 #include "r1/spec/epoch.hpp"
 #include "r1/spec/graph.hpp"
@@ -40,11 +41,12 @@ void for_rows(bool parallel, std::uint32_t n, const Body& body) {
 // no reordering makes local on a small-world graph; a prefetch hint changes no bit (R1-FOC-090).
 // Measured on BA 10^6 (m = 10), one walk on two cores: 29-52 ms without, 20-21 ms at 64 (32:
 // 21 ms, 16: 23-25 ms, 8: 27 ms); reordering the particles (breadth first, by degree) gained
-// nothing over the canonical order.
-inline constexpr std::uint64_t kGatherAhead = 64;
+// nothing over the canonical order. Since the hint fetches into the second-level cache
+// (fx::gather_hint), 160 ahead: a BA 10^6 focus step 0.138-0.143 s -> 0.123 s (64: 0.125-0.130 s).
+inline constexpr std::uint64_t kGatherAhead = 160;
 template <class T>
 inline void gather_ahead(const T* x, const std::uint32_t* col, std::uint64_t k, std::uint64_t end) {
-  if (k + kGatherAhead < end) __builtin_prefetch(x + col[k + kGatherAhead]);
+  if (k + kGatherAhead < end) fx::gather_hint(x + col[k + kGatherAhead]);
 }
 
 // Apportioned shares of one (raws in [0, 2^32], R1-FOC-020, R1-FOC-041), stored in four bytes

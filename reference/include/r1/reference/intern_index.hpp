@@ -13,6 +13,8 @@
 #include <string_view>
 #include <vector>
 
+#include "r1/fixedpoint/prefetch.hpp"
+
 namespace r1 {
 
 // Ids are uniform hash outputs: their first 8 bytes are already a good hash.
@@ -84,7 +86,7 @@ class InternIndex {
   // fetch of the table entry the slot names, GCC 12 left no prefetch instruction in the reader's
   // loop (seen in its object code).
   void prefetch_slot(View key) const {
-    __builtin_prefetch(slots_.data() + (static_cast<std::size_t>(Hash{}(key)) & (slots_.size() - 1)));
+    fx::gather_hint(slots_.data() + (static_cast<std::size_t>(Hash{}(key)) & (slots_.size() - 1)));
   }
 
   void clear() { std::vector<std::uint64_t>().swap(slots_); }
