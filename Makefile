@@ -62,6 +62,7 @@ test:
 	@scripts/phase.sh deps scripts/install-deps.sh
 	@scripts/phase.sh layering /usr/bin/python3 scripts/check-layering.py
 	@scripts/phase.sh build $(MAKE) --no-print-directory build
+	@scripts/phase.sh aarch64 /usr/bin/python3 scripts/check-aarch64.py build -j $(JOBS)
 	@scripts/test-costs.sh seed build main
 	@scripts/phase.sh tests env R1_REQUIRE_VULKAN=1 R1_REQUIRE_BROWSER=1 ctest --test-dir build --output-on-failure -j $(JOBS) --timeout 900
 	@scripts/phase.sh san-build $(MAKE) --no-print-directory san-build

@@ -16,6 +16,8 @@ set -euo pipefail
 #     playwright-core come after the packages, below)
 #   vulkan: the loader and headers, shaderc (GLSL to SPIR-V at run time, the 13.1 trait's
 #     shader_compile), Mesa's lavapipe (a Vulkan device on the CPU, so CI runs the Vulkan tests)
+#   portability (x86-64 hosts only): the aarch64 cross compiler, with which every source is compiled
+#     for ARM, syntax only (scripts/check-aarch64.py, R1-BKD-045)
 PACKAGES=(
   g++ cmake ninja-build make pkg-config ccache
   clang-14 libclang-rt-14-dev lld
@@ -27,6 +29,7 @@ PACKAGES=(
   libvulkan-dev libshaderc-dev mesa-vulkan-drivers
   libcpp-httplib-dev chromium
 )
+if [ "$(uname -m)" = "x86_64" ]; then PACKAGES+=(g++-aarch64-linux-gnu); fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

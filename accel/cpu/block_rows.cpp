@@ -11,7 +11,9 @@
 // Every quantity is formed modulo 2^128; the true numerator is below 2^118 in magnitude, so its
 // i128 reading is exact and the one rounding is apply_block's. A column whose row gathers an
 // entry beyond the offset range takes the exact scalar sum instead.
+#if defined(__x86_64__)
 #include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <atomic>
@@ -24,9 +26,13 @@
 #include "r1/fixedpoint/prefetch.hpp"
 #include "r1/solvers/exact_round.hpp"
 #include "r1/solvers/panel.hpp"
+#if defined(__x86_64__)
 #include "wide_lanes.hpp"
+#endif
 
 namespace r1::accel::cpu {
+
+#if defined(__x86_64__)
 namespace {
 
 constexpr int kOffsetBits = 51;
@@ -282,5 +288,11 @@ Q32RowsFactory rows_factory(Simd level, bool parallel, std::size_t fuse_from) {
     return std::make_unique<IfmaRows>(op, parallel, fuse_from);
   };
 }
+
+#else  // not x86-64: no IFMA, so the solver's own rows (R1-BKD-045)
+
+Q32RowsFactory rows_factory(Simd, bool, std::size_t) { return {}; }
+
+#endif
 
 }  // namespace r1::accel::cpu

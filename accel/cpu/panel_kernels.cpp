@@ -19,7 +19,14 @@
 // (tests: panel_kernels_test).
 #include "r1/accel/cpu/panel_kernels.hpp"
 
+// The vector kernels are x86-64's (R1-BKD-045): elsewhere (aarch64) the level is always portable,
+// and the kernels are the solver's own on TBB tasks.
+#if defined(__x86_64__)
+#define R1_CPU_X86 1
 #include <immintrin.h>
+#else
+#define R1_CPU_X86 0
+#endif
 
 #include <algorithm>
 #include <cstdlib>
@@ -30,7 +37,9 @@
 #include <vector>
 
 #include "r1/solvers/exact_round.hpp"
+#if R1_CPU_X86
 #include "wide_lanes.hpp"
+#endif
 
 
 namespace r1::accel::cpu {
@@ -56,7 +65,7 @@ std::optional<Simd> simd_from_name(std::string_view name) {
 }
 
 Simd detect_simd() {
-#if defined(__x86_64__) || defined(__i386__)
+#if R1_CPU_X86
   __builtin_cpu_init();
   if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512ifma")) return Simd::kAvx512Ifma;
   if (__builtin_cpu_supports("avx2")) return Simd::kAvx2;
@@ -79,6 +88,8 @@ Simd chosen_simd(std::string* error) {
   }
   return *s;
 }
+
+#if R1_CPU_X86
 
 namespace {
 
@@ -743,10 +754,23 @@ void three_term_ifma(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q3
   });
 }
 
+#else  // R1_CPU_X86
+
+void three_term_ifma(std::size_t len, const fx::Q32* s, const fx::Q32* y, fx::Q32* p, double alpha, double beta,
+                     double gamma, bool parallel) {
+  spectral::three_term(len, s, y, p, alpha, beta, gamma, parallel);  // never asked for: no IFMA here
+}
+
+#endif  // R1_CPU_X86
+
 std::unique_ptr<PanelOps<fx::Q32>> make_panel_kernels(std::size_t n, int e, bool parallel, int frac, Simd level) {
   if (static_cast<int>(level) > static_cast<int>(detect_simd()))
     throw std::invalid_argument("cpu kernels: this CPU does not run " + std::string(simd_name(level)));
+#if R1_CPU_X86
   return std::make_unique<CpuPanelOps>(n, e, parallel, frac, level);
+#else
+  return std::make_unique<PanelOps<fx::Q32>>(n, e, parallel, frac);  // the level is portable here
+#endif
 }
 
 Q32KernelFactory kernel_factory(Simd level) {
