@@ -4,7 +4,20 @@
 // steps T(eps) for a graph (the heat term of kappa is then l_h): a conservative timing. The
 // 10^6-particle, 10^7-link case (m = 10) runs only with R1_BENCH_LARGE=1 set in the environment:
 // generating it needs about 2 GiB and a minute.
+//
+// Beside the stage, the floor under it on the machine at hand (BM_FocusGatherFloor_Ba1M). A Q32
+// step gathers phi for the diffusion's in-link sums and for the springs and the heat kernel's
+// first walk, then t_1 .. t_7 for the seven further walks (R1-FOC-090); on graphs past the caches
+// the products' time is these random gathers. The in-links lie inside A_sym's pattern, so at
+// best one pass over A_sym serves the first three and a step is eight gathering passes. The floor
+// runs eight passes over A_sym's rows per step with nothing but each entry's gather and a 64-bit
+// multiply-add: no exact 128-bit sums, no rounding, no combination, projection or recurrence
+// terms, the stage's row split, prefetch distance and hint. Timed beside the stage for the T(eps)
+// of the BA 10^6 epoch (lambda2 = 0.5695): a measure of this machine, not a result.
 #include <benchmark/benchmark.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <cstdlib>
 #include <map>
@@ -13,6 +26,7 @@
 #include <tuple>
 #include <utility>
 
+#include "r1/fixedpoint/prefetch.hpp"
 #include "r1/solvers/focus.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
@@ -71,7 +85,9 @@ void run_focus(benchmark::State& st, const r1::Graph& g, bool parallel) {
   st.counters["nnz"] = static_cast<double>(g.nnz());
   st.counters["steps"] = steps;
   st.counters["kappa"] = kappa;
-  // Seconds per step, the figure that scales with the graph.
+  // Seconds per step of T(eps), the figure that scales with the graph. A run that stops at a
+  // repeated iterate (R1-FOC-093) runs fewer steps than T, so it is then below the time of a
+  // step run.
   st.counters["s_per_step"] = benchmark::Counter(static_cast<double>(steps) * static_cast<double>(st.iterations()),
                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
@@ -87,6 +103,80 @@ BENCHMARK(BM_FocusF64_Crystal)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FocusQ32_Ba)->Args({10000, 0})->Args({100000, 0})->Args({100000, 1})->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_FocusF64_Ba)->Args({10000, 0})->Args({100000, 0})->Args({100000, 1})->Unit(benchmark::kMillisecond)->Iterations(1);
 
+// lambda2 of the BA 10^6 (m = 10) epoch, as its spectral stage finds it: T(eps) = 79 steps there.
+constexpr double kBa1MLambda2 = 0.569464;
+
+// The epoch's focus: the stage as `r1 epoch --backend cpu` runs it (parallel rows, stopping at a
+// repeated iterate, which on this graph first comes at step T).
+void focus_of_epoch(benchmark::State& st, const r1::Graph& g) {
+  r1::FocusOptions opt;
+  opt.parallel = true;
+  std::uint32_t steps = 0;
+  for (auto _ : st) {
+    auto f = r1::compute_focus_q32(g, r1::TriKernelParams{}, kBa1MLambda2, {}, opt);
+    if (!f.is_ok()) {
+      st.SkipWithError(f.status().message().c_str());
+      return;
+    }
+    steps = f->steps;
+    benchmark::DoNotOptimize(f->phi.data());
+  }
+  st.counters["steps"] = steps;
+}
+
+// Rows of 32-bit weights over a column pattern: what a pass of the floor reads.
+struct GatherRows {
+  std::vector<std::uint64_t> ptr;
+  std::vector<std::uint32_t> col;
+  std::vector<std::uint32_t> w;
+};
+
+GatherRows symmetric_rows(const r1::Graph& g) {
+  GatherRows r{g.row_ptr, g.col, std::vector<std::uint32_t>(g.col.size())};
+  for (std::size_t k = 0; k < g.w.size(); ++k) r.w[k] = static_cast<std::uint32_t>(g.w[k]);
+  return r;
+}
+
+// One pass: y_i = (sum_k w_k x_(col_k)) >> 32 in wrapping 64-bit arithmetic, rows split as the
+// stage splits them (2048 per task), each gather hinted 160 entries ahead into the second-level
+// cache (kGatherAhead, fx::gather_hint).
+void gather_pass(const GatherRows& m, const std::vector<std::int64_t>& x, std::vector<std::int64_t>& y) {
+  constexpr std::uint64_t kAhead = 160;
+  const std::uint64_t end = m.col.size();
+  const auto n = static_cast<std::uint32_t>(m.ptr.size() - 1);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 2048), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t i = r.begin(); i < r.end(); ++i) {
+      std::uint64_t acc = 0;
+      for (std::uint64_t k = m.ptr[i]; k < m.ptr[i + 1]; ++k) {
+        if (k + kAhead < end) r1::fx::gather_hint(x.data() + m.col[k + kAhead]);
+        acc += std::uint64_t{m.w[k]} * static_cast<std::uint64_t>(x[m.col[k]]);
+      }
+      y[i] = static_cast<std::int64_t>(acc >> 32);
+    }
+  });
+}
+
+void gather_floor(benchmark::State& st, const r1::Graph& g) {
+  auto plan = r1::plan_focus_steps(g, r1::TriKernelParams{}, kBa1MLambda2);
+  if (!plan.is_ok()) {
+    st.SkipWithError(plan.status().message().c_str());
+    return;
+  }
+  const GatherRows sym = symmetric_rows(g);
+  std::vector<std::int64_t> x(g.n, std::int64_t{1} << 28), y(g.n);
+  for (auto _ : st) {
+    for (std::uint32_t s = 0; s < plan->steps; ++s)
+      for (int pass = 0; pass < 8; ++pass) {  // the springs, t_1 and the diffusion, then t_2 .. t_8
+        gather_pass(sym, x, y);
+        std::swap(x, y);
+      }
+    benchmark::DoNotOptimize(x.data());
+  }
+  st.counters["steps"] = plan->steps;
+  st.counters["s_per_step"] = benchmark::Counter(static_cast<double>(plan->steps) * static_cast<double>(st.iterations()),
+                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 // The 10^7-link case, registered only on request (R1_BENCH_LARGE=1).
 const bool kLargeRegistered = [] {
   const char* on = std::getenv("R1_BENCH_LARGE");
@@ -96,6 +186,12 @@ const bool kLargeRegistered = [] {
   })->Unit(benchmark::kSecond)->Iterations(1);
   benchmark::RegisterBenchmark("BM_FocusQ32_Ba1M/parallel:1", [](benchmark::State& st) {
     run_focus<true>(st, graph(r1::GenKind::kBa, 1000000, 10), true);
+  })->Unit(benchmark::kSecond)->Iterations(1);
+  benchmark::RegisterBenchmark("BM_FocusQ32_Ba1M_Epoch", [](benchmark::State& st) {
+    focus_of_epoch(st, graph(r1::GenKind::kBa, 1000000, 10));
+  })->Unit(benchmark::kSecond)->Iterations(1);
+  benchmark::RegisterBenchmark("BM_FocusGatherFloor_Ba1M", [](benchmark::State& st) {
+    gather_floor(st, graph(r1::GenKind::kBa, 1000000, 10));
   })->Unit(benchmark::kSecond)->Iterations(1);
   benchmark::RegisterBenchmark("BM_FocusF64_Ba1M/parallel:1", [](benchmark::State& st) {
     run_focus<false>(st, graph(r1::GenKind::kBa, 1000000, 10), true);

@@ -108,13 +108,13 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
   std::vector<Q32>&t0 = w.t0, &t1 = w.t1, &t2 = w.t2;
   t0.assign(x.begin(), x.end());
   t1.resize(n);
-  t2.resize(n);
+  if (ops.on_products()) t2.resize(n);  // a product writes apart from what it reads
   std::vector<i128>& acc = w.acc;  // sum_k c_k t_k exactly: K + 1 <= 33 terms below 2^96 each
   acc.resize(m);
   const std::int64_t c0 = coeff.q32[0].raw;
   for (std::uint32_t sub = 0; sub < coeff.substeps; ++sub) {
     std::copy(t0.begin() + m, t0.end(), t1.begin() + m);
-    std::copy(t0.begin() + m, t0.end(), t2.begin() + m);
+    if (ops.on_products()) std::copy(t0.begin() + m, t0.end(), t2.begin() + m);
     if (ops.on_products()) {
       // The same recurrence with each product on the backend's (R1-FOC-092): a whole-graph
       // operator, so m = n.
@@ -147,14 +147,15 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
         const std::int64_t ck = coeff.q32[k].raw;
         for_rows(parallel, m, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t i = b; i < e; ++i) {
-            // t_(k+1),i = RNE(2 sum_j N(i, j) t_k,j - t_(k-1),i), one rounding.
+            // t_(k+1),i = RNE(2 sum_j N(i, j) t_k,j - t_(k-1),i), one rounding. Row i is the only
+            // reader of t_(k-1),i, so t_(k+1),i takes its place: two vectors, not three, beside
+            // the gathers (R1-FOC-090).
             const i128 exact = 2 * ops.walk_row(i, t1.data()) - (static_cast<i128>(t0[i].raw) << 32);
-            t2[i] = Q32::from_raw(round_q32(exact));
-            acc[i] += static_cast<i128>(ck) * t2[i].raw;
+            t0[i] = Q32::from_raw(round_q32(exact));
+            acc[i] += static_cast<i128>(ck) * t0[i].raw;
           }
         });
         std::swap(t0, t1);
-        std::swap(t1, t2);
       }
     }
     // The sub-step result, rounded once; it is the next sub-step's t_0.
