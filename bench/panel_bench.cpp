@@ -9,17 +9,23 @@
 // Entries are random multiples of 2^-48 of magnitude below 2^3, as unit basis vectors' are
 // (R1-SPEC-011). Generation is outside the timed loop. Arguments: rows, list length, SIMD level
 // (0 portable, 1 avx2, 2 avx512ifma); levels this CPU lacks are skipped with the reason.
-//   * Operator: one block application of L~ to 7 vectors (below).
+//   * Operator: one block application of L~ to 7 vectors, and OperatorGatherFloor, its gathers
+//     alone (below).
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <numeric>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "r1/accel/cpu/panel_kernels.hpp"
+#include "r1/fixedpoint/prefetch.hpp"
 #include "r1/fixedpoint/counter_rng.hpp"
 #include "r1/reference/generate.hpp"
 #include "r1/reference/graph_build.hpp"
@@ -138,21 +144,15 @@ void BM_Ritz(benchmark::State& state) {
   }
 }
 
-// The operator's block application (R1-SPEC-073) on a Barabasi-Albert graph (m = 10), 7 vectors
-// of unit-vector magnitude, on the cpu backend's IFMA rows (level 2) or the solver's own (0).
-// Arguments: particles, block columns, level. 10^6 particles (10^7 links, a minute to generate)
-// only with R1_BENCH_LARGE=1.
-void BM_Operator(benchmark::State& state) {
-  Simd level;
-  if (!setup(state, level)) return;
-  const auto n = static_cast<std::int64_t>(state.range(0));
+// The Barabasi-Albert graph (m = 10) of n particles the operator benchmarks share, generated on
+// first use (10^6 particles: 10^7 links, a minute) and only with R1_BENCH_LARGE=1 past 10^5.
+const r1::Graph* ba_graph(benchmark::State& state, std::int64_t n) {
   if (n > 100000 && (std::getenv("R1_BENCH_LARGE") == nullptr || std::string(std::getenv("R1_BENCH_LARGE")) != "1")) {
     state.SkipWithError("set R1_BENCH_LARGE=1 for 10^6 particles");
-    return;
+    return nullptr;
   }
   static std::int64_t made = 0;
   static r1::Graph g;
-  static std::unique_ptr<r1::SpectralOperator<r1::fx::Q32>> op;
   if (made != n) {
     r1::GenParams gp;
     gp.kind = r1::GenKind::kBa;
@@ -162,17 +162,33 @@ void BM_Operator(benchmark::State& state) {
     auto built = snap.is_ok() ? r1::build_graph(*snap) : r1::Result<r1::Graph>(snap.status());
     if (!built.is_ok()) {
       state.SkipWithError(built.status().message().c_str());
-      return;
+      return nullptr;
     }
-    op.reset();
     g = std::move(built).value();
-    auto o = r1::spectral_operator_q32(g, r1::SpectralParams{});
+    made = n;
+  }
+  return &g;
+}
+
+// The operator's block application (R1-SPEC-073) on a Barabasi-Albert graph (m = 10), 7 vectors
+// of unit-vector magnitude, on the cpu backend's IFMA rows (level 2) or the solver's own (0).
+// Arguments: particles, block columns, level.
+void BM_Operator(benchmark::State& state) {
+  Simd level;
+  if (!setup(state, level)) return;
+  const auto n = static_cast<std::int64_t>(state.range(0));
+  const r1::Graph* g = ba_graph(state, n);
+  if (g == nullptr) return;
+  static const r1::Graph* made = nullptr;
+  static std::unique_ptr<r1::SpectralOperator<r1::fx::Q32>> op;
+  if (made != g || op == nullptr || op->n != g->n) {
+    auto o = r1::spectral_operator_q32(*g, r1::SpectralParams{});
     if (!o.is_ok()) {
       state.SkipWithError(o.status().message().c_str());
       return;
     }
     op = std::make_unique<r1::SpectralOperator<r1::fx::Q32>>(std::move(o).value());
-    made = n;
+    made = g;
   }
   op->rows = level == Simd::kAvx512Ifma ? std::shared_ptr<r1::spectral::BlockRows>(r1::accel::cpu::rows_factory(level, true)(*op)) : nullptr;
   const auto rows = static_cast<std::size_t>(n), count = static_cast<std::size_t>(state.range(1));
@@ -182,6 +198,67 @@ void BM_Operator(benchmark::State& state) {
   for (auto _ : state) {
     op->apply_block(x.data(), count, y.data(), count, count, true);
     benchmark::DoNotOptimize(y.data());
+  }
+}
+
+// The floor under a block application on this machine: for every row i the sum of the 64-byte
+// rows x_j (eight 64-bit lanes: a compact block of 7 columns padded to 8, R1-SPEC-074) over the
+// stored entries j of row i of A_sym, plain 64-bit adds, no weights, no exact sums, no rounding;
+// rows streamed and split over the cores as the cpu rows split them, each gather hinted 96
+// entries ahead into the second-level cache (accel/cpu/block_rows.cpp). A block application
+// gathers one such row per stored entry, so this is what its gathers cost alone. Argument:
+// particles.
+using Lanes = std::int64_t __attribute__((vector_size(64)));
+using FloorBody = void (*)(const r1::Graph&, const std::int64_t*, std::int64_t*, std::uint32_t, std::uint32_t);
+
+// x and y hold 8 lanes a row; loads and stores go through memcpy, so no alignment is assumed.
+inline void floor_body(const r1::Graph& g, const std::int64_t* x, std::int64_t* y, std::uint32_t b, std::uint32_t e) {
+  constexpr std::uint64_t kAhead = 96;
+  const std::uint64_t end = g.col.size();
+  for (std::uint32_t i = b; i < e; ++i) {
+    Lanes acc = {};
+    for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
+      if (k + kAhead < end) r1::fx::gather_hint(x + std::size_t{8} * g.col[k + kAhead]);
+      Lanes v;
+      std::memcpy(&v, x + std::size_t{8} * g.col[k], sizeof v);
+      acc += v;
+    }
+    std::memcpy(y + std::size_t{8} * i, &acc, sizeof acc);
+  }
+}
+
+#if defined(__x86_64__)
+// The same loop with 512-bit adds where the CPU has them (one add an entry).
+__attribute__((target("avx512f"))) void floor_body_avx512(const r1::Graph& g, const std::int64_t* x, std::int64_t* y,
+                                                           std::uint32_t b, std::uint32_t e) {
+  floor_body(g, x, y, b, e);
+}
+#endif
+
+void BM_OperatorGatherFloor(benchmark::State& state) {
+  const auto n = static_cast<std::int64_t>(state.range(0));
+  const r1::Graph* g = ba_graph(state, n);
+  if (g == nullptr) return;
+  // Rows on whole cache lines, as the cpu rows copy a large block (one line a gathered row), in
+  // blocks from operator new, which the benchmarks share with the r1 command (huge pages).
+  const std::size_t entries = std::size_t{8} * g->n;
+  std::vector<std::int64_t> xs(entries + 8), ys(entries + 8);
+  auto line_start = [](std::vector<std::int64_t>& v) {
+    const auto at = reinterpret_cast<std::uintptr_t>(v.data());
+    return v.data() + ((64 - at % 64) % 64) / sizeof(std::int64_t);
+  };
+  std::int64_t* const x = line_start(xs);
+  std::int64_t* const y = line_start(ys);
+  for (std::size_t i = 0; i < entries; ++i) x[i] = static_cast<std::int64_t>(r1::rng::bits(0x0be7, i, 0) >> 15);
+  FloorBody body = floor_body;
+#if defined(__x86_64__)
+  if (__builtin_cpu_supports("avx512f")) body = floor_body_avx512;
+#endif
+  for (auto _ : state) {
+    // Rows split over the cores in blocks of 4096, as the cpu rows split them.
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, g->n, 4096),
+                      [&](const tbb::blocked_range<std::uint32_t>& r) { body(*g, x, y, r.begin(), r.end()); });
+    benchmark::DoNotOptimize(y);
   }
 }
 
@@ -196,6 +273,7 @@ void step_args(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_Dots)->Apply(step_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Combine)->Apply(step_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Operator)->ArgsProduct({{100000L, 1000000L}, {7L}, {0L, 2L}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_OperatorGatherFloor)->Arg(100000L)->Arg(1000000L)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Ritz)->ArgsProduct({{100000L, 1000000L}, {189L}, {0L, 2L}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 }  // namespace
