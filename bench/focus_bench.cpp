@@ -124,32 +124,19 @@ void focus_of_epoch(benchmark::State& st, const r1::Graph& g) {
   st.counters["steps"] = steps;
 }
 
-// Rows of 32-bit weights over a column pattern: what a pass of the floor reads.
-struct GatherRows {
-  std::vector<std::uint64_t> ptr;
-  std::vector<std::uint32_t> col;
-  std::vector<std::uint32_t> w;
-};
-
-GatherRows symmetric_rows(const r1::Graph& g) {
-  GatherRows r{g.row_ptr, g.col, std::vector<std::uint32_t>(g.col.size())};
-  for (std::size_t k = 0; k < g.w.size(); ++k) r.w[k] = static_cast<std::uint32_t>(g.w[k]);
-  return r;
-}
-
-// One pass: y_i = (sum_k w_k x_(col_k)) >> 32 in wrapping 64-bit arithmetic, rows split as the
+// One pass over A_sym's rows: y_i = (sum_k w_k x_(col_k)) >> 32 in wrapping 64-bit arithmetic, rows split as the
 // stage splits them (2048 per task), each gather hinted 160 entries ahead into the second-level
 // cache (kGatherAhead, fx::gather_hint).
-void gather_pass(const GatherRows& m, const std::vector<std::int64_t>& x, std::vector<std::int64_t>& y) {
+void gather_pass(const r1::Graph& g, const std::vector<std::uint32_t>& w, const std::vector<std::int64_t>& x,
+                 std::vector<std::int64_t>& y) {
   constexpr std::uint64_t kAhead = 160;
-  const std::uint64_t end = m.col.size();
-  const auto n = static_cast<std::uint32_t>(m.ptr.size() - 1);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 2048), [&](const tbb::blocked_range<std::uint32_t>& r) {
+  const std::uint64_t end = g.col.size();
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, g.n, 2048), [&](const tbb::blocked_range<std::uint32_t>& r) {
     for (std::uint32_t i = r.begin(); i < r.end(); ++i) {
       std::uint64_t acc = 0;
-      for (std::uint64_t k = m.ptr[i]; k < m.ptr[i + 1]; ++k) {
-        if (k + kAhead < end) r1::fx::gather_hint(x.data() + m.col[k + kAhead]);
-        acc += std::uint64_t{m.w[k]} * static_cast<std::uint64_t>(x[m.col[k]]);
+      for (std::uint64_t k = g.row_ptr[i]; k < g.row_ptr[i + 1]; ++k) {
+        if (k + kAhead < end) r1::fx::gather_hint(x.data() + g.col[k + kAhead]);
+        acc += std::uint64_t{w[k]} * static_cast<std::uint64_t>(x[g.col[k]]);
       }
       y[i] = static_cast<std::int64_t>(acc >> 32);
     }
@@ -162,12 +149,14 @@ void gather_floor(benchmark::State& st, const r1::Graph& g) {
     st.SkipWithError(plan.status().message().c_str());
     return;
   }
-  const GatherRows sym = symmetric_rows(g);
+  // A_sym's weights in four bytes, as the stage stores its shares.
+  std::vector<std::uint32_t> w(g.w.size());
+  for (std::size_t k = 0; k < w.size(); ++k) w[k] = static_cast<std::uint32_t>(g.w[k]);
   std::vector<std::int64_t> x(g.n, std::int64_t{1} << 28), y(g.n);
   for (auto _ : st) {
     for (std::uint32_t s = 0; s < plan->steps; ++s)
       for (int pass = 0; pass < 8; ++pass) {  // the springs, t_1 and the diffusion, then t_2 .. t_8
-        gather_pass(sym, x, y);
+        gather_pass(g, w, x, y);
         std::swap(x, y);
       }
     benchmark::DoNotOptimize(x.data());

@@ -114,7 +114,6 @@ void heat_q32(const OperatorsQ32& ops, const HeatCoefficients& coeff, std::span<
   const std::int64_t c0 = coeff.q32[0].raw;
   for (std::uint32_t sub = 0; sub < coeff.substeps; ++sub) {
     std::copy(t0.begin() + m, t0.end(), t1.begin() + m);
-    if (ops.on_products()) std::copy(t0.begin() + m, t0.end(), t2.begin() + m);
     if (ops.on_products()) {
       // The same recurrence with each product on the backend's (R1-FOC-092): a whole-graph
       // operator, so m = n.
